@@ -1,0 +1,203 @@
+//! Avoidance points on the arm, the workspace potential (eq. 26) and its exact
+//! joint-space gradient `mu = dP/dq` (eq. 20).
+//!
+//! Points: on link `j` (from the pivot `o_j` to the next origin `o_{j+1}`), the
+//! end point `o_{j+1}` (a joint, [`PointKind::Joint`]) and `m` interior points at
+//! `t = i / (m + 1)`, `i = 1..m` ([`PointKind::Link`]); `m = 1` is the paper's
+//! "joints and link mid-points". The base `o_0` never moves and is not a point.
+//! Point ids run `j * (m + 1) + i`, the end point last (`i = m`).
+//!
+//! Potential, over the pairs within influence (see [`crate::obstacle`]):
+//!
+//! ```text
+//! P = sum_j sum_i 1 / (C_j(p_i) - 1)                       (eq. 26)
+//! f_i = dP/dp_i = - sum_j grad C_j(p_i) / (C_j(p_i) - 1)^2
+//! ```
+//!
+//! `mu = sum_i J_{p_i}^T f_i` in one backward sweep, O(n + points x obstacles):
+//! going from the last link to the first, keep the total force `F` of the
+//! points beyond and its moment `N` about the current pivot; moving the
+//! reference from `o_{j+1}` to `o_j` adds `(o_{j+1} - o_j) x F`. Then
+//! `mu_j = z_j . N` (revolute) or `z_j . (F_beyond + sum t f)` (prismatic: a point
+//! at fraction `t` of the sliding link moves `t` as far as its end).
+
+use crate::kinematics::Frames;
+use crate::math::Vec3;
+use crate::obstacle::{Obstacle, PointKind};
+use crate::robot::{JointKind, Robot};
+
+/// Where the avoidance points are and how much room they need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AvoidanceSettings {
+    /// Clearance margin added to every semi-axis for joint points, length units (listing: 6.0 in).
+    pub joint_margin: f32,
+    /// Clearance margin for interior link points, length units (listing: 3.0 in).
+    pub link_margin: f32,
+    /// Interior points per link, 1 to 8 (1 = the mid-point, as the paper).
+    pub points_per_link: u8,
+    /// Obstacles farther than this outside a point's inflated obstacle do not
+    /// constrain it, length units. The paper uses every obstacle (infinite).
+    pub influence_distance: f32,
+}
+
+impl AvoidanceSettings {
+    /// The listing's margins (6.0, 3.0), mid-points only, 24 length units of influence.
+    pub const fn listing() -> Self {
+        AvoidanceSettings {
+            joint_margin: 6.0,
+            link_margin: 3.0,
+            points_per_link: 1,
+            influence_distance: 24.0,
+        }
+    }
+
+    /// Margins indexed by [`PointKind`].
+    pub fn margins(&self) -> [f32; 2] {
+        [self.joint_margin, self.link_margin]
+    }
+
+    /// Avoidance points per link (interior points + the end point).
+    pub fn points_per_link_total(&self) -> usize {
+        self.points_per_link as usize + 1
+    }
+}
+
+impl Default for AvoidanceSettings {
+    fn default() -> Self {
+        Self::listing()
+    }
+}
+
+/// One avoidance point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AvoidancePoint {
+    /// Id: `link * (points_per_link + 1) + index`.
+    pub id: u16,
+    /// Link (0-based joint) it rides on.
+    pub link: u8,
+    /// Fraction along the link from its pivot, in `(0, 1]`.
+    pub t: f32,
+    /// Joint or link point.
+    pub kind: PointKind,
+    /// World position, length units.
+    pub position: Vec3,
+}
+
+/// The points of link `link`, interior ones first, end point last.
+pub fn link_points<const N: usize>(
+    frames: &Frames<N>,
+    settings: &AvoidanceSettings,
+    link: usize,
+) -> impl Iterator<Item = AvoidancePoint> {
+    let start = frames.pivot(link);
+    let end = frames.origin(link);
+    let per = settings.points_per_link_total();
+    let interior = settings.points_per_link as usize;
+    (0..per).map(move |i| {
+        let (t, kind) = if i == interior {
+            (1.0, PointKind::Joint)
+        } else {
+            ((i + 1) as f32 / per as f32, PointKind::Link)
+        };
+        AvoidancePoint {
+            id: (link * per + i) as u16,
+            link: link as u8,
+            t,
+            kind,
+            position: if i == interior {
+                end
+            } else {
+                start + (end - start) * t
+            },
+        }
+    })
+}
+
+/// Every avoidance point of the arm, from the base outwards.
+pub fn points<'a, const N: usize>(
+    frames: &'a Frames<N>,
+    settings: &'a AvoidanceSettings,
+) -> impl Iterator<Item = AvoidancePoint> + 'a {
+    (0..frames.len()).flat_map(move |link| link_points(frames, settings, link))
+}
+
+/// The closest approach of any point to any obstacle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Clearance {
+    /// `C - 1` of the inflated obstacle (eq. 25): > 0 outside, dimensionless.
+    pub value: f32,
+    /// Avoidance point id (see module docs).
+    pub point: u16,
+    /// Obstacle index.
+    pub obstacle: u8,
+}
+
+/// What the obstacles say about one configuration.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ObstacleField {
+    /// Potential `P` of eq. 26 over the pairs within influence.
+    pub potential: f32,
+    /// Closest pair within influence, if any.
+    pub clearance: Option<Clearance>,
+    /// Pairs within influence.
+    pub active_pairs: u16,
+    /// Whether every point is strictly outside every inflated obstacle.
+    pub clear: bool,
+}
+
+/// Evaluates the potential and writes `mu = dP/dq` into `mu` (`frames.len()` values).
+pub fn potential_gradient<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    obstacles: &[Obstacle],
+    settings: &AvoidanceSettings,
+    mu: &mut [f32],
+) -> ObstacleField {
+    let mut field = ObstacleField {
+        clear: true,
+        ..ObstacleField::default()
+    };
+    let mut force = Vec3::zeros();
+    let mut moment = Vec3::zeros();
+    let n = frames.len().min(mu.len());
+    for j in (0..n).rev() {
+        let pivot = frames.pivot(j);
+        moment += (frames.origin(j) - pivot).cross(&force);
+        let beyond = force;
+        let mut sliding_force = Vec3::zeros();
+        for point in link_points(frames, settings, j) {
+            let mut f = Vec3::zeros();
+            for (index, obstacle) in obstacles.iter().enumerate() {
+                let Some(contact) = obstacle.contact(&point.position, point.kind) else {
+                    continue;
+                };
+                field.active_pairs = field.active_pairs.saturating_add(1);
+                if field.clearance.is_none_or(|c| contact.clearance < c.value) {
+                    field.clearance = Some(Clearance {
+                        value: contact.clearance,
+                        point: point.id,
+                        obstacle: index as u8,
+                    });
+                }
+                if contact.clearance <= 0.0 {
+                    field.clear = false;
+                    continue;
+                }
+                let inv = 1.0 / contact.clearance;
+                field.potential += inv;
+                f -= contact.gradient * (inv * inv);
+            }
+            force += f;
+            moment += (point.position - pivot).cross(&f);
+            sliding_force += f * point.t;
+        }
+        let z = frames.axis(j);
+        mu[j] = match robot.joints()[j].kind {
+            JointKind::Revolute => z.dot(&moment),
+            JointKind::Prismatic => z.dot(&(beyond + sliding_force)),
+        };
+    }
+    field
+}

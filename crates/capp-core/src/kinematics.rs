@@ -1,0 +1,227 @@
+//! Forward kinematics (eqs. 5-6) and exact Jacobian-transpose products (eq. 14).
+//!
+//! Frames: `T_0 = I` (the base), `T_k = T_{k-1} A_k`, the end effector is `T_n`.
+//! Joint `k` (1-based) moves about / along the axis `z_{k-1}` of frame `k-1`
+//! through its origin `o_{k-1}`. Here joints are 0-based: joint `j` moves about
+//! [`Frames::axis`]`(j)` through [`Frames::pivot`]`(j)`, and its link ends at
+//! [`Frames::origin`]`(j)` (= `o_{j+1}`).
+//!
+//! Exact columns of the Jacobian of anything carried by a frame at or after
+//! joint `j` (no finite differences):
+//!
+//! ```text
+//! point p:      dp/dq_j = z x (p - o)   (revolute)      z   (prismatic)
+//! direction u:  du/dq_j = z x u         (revolute)      0   (prismatic)
+//! ```
+//!
+//! so for a force `f` applied at `p`, `(J^T f)_j = z . ((p - o) x f)` or `z . f`,
+//! and for a direction error `e` on `u`, `(J_u^T e)_j = z . (u x e)` or `0`.
+//! Each product costs O(n) after one forward pass; no 6 x n matrix is formed.
+
+use crate::math::{Mat3, Vec3};
+use crate::robot::{JointKind, Robot};
+
+/// Every frame of the chain at one configuration. Sized once for `N` joints.
+#[derive(Clone, Debug)]
+pub struct Frames<const N: usize> {
+    n: usize,
+    /// `origin[j]` = `o_{j+1}`, the origin of the frame after joint `j`.
+    origin: [Vec3; N],
+    /// `axis[j]` = `z_j`, the unit axis joint `j` moves about or along.
+    axis: [Vec3; N],
+    /// Orientation of the end-effector frame `n`: columns `r_n1, r_n2, r_n3` (eq. 6).
+    end_rotation: Mat3,
+}
+
+impl<const N: usize> Default for Frames<N> {
+    fn default() -> Self {
+        Frames {
+            n: 0,
+            origin: [Vec3::zeros(); N],
+            axis: [Vec3::z(); N],
+            end_rotation: Mat3::identity(),
+        }
+    }
+}
+
+impl<const N: usize> Frames<N> {
+    /// Number of joints these frames were computed for.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether no frames have been computed.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Origin of the frame after joint `j` (`o_{j+1}`), length units.
+    #[inline]
+    pub fn origin(&self, j: usize) -> Vec3 {
+        self.origin[j]
+    }
+
+    /// Origins `o_1 .. o_n`.
+    #[inline]
+    pub fn origins(&self) -> &[Vec3] {
+        &self.origin[..self.n]
+    }
+
+    /// Origin `o_j` of the frame *before* joint `j`: the point joint `j` turns about.
+    #[inline]
+    pub fn pivot(&self, j: usize) -> Vec3 {
+        if j == 0 {
+            Vec3::zeros()
+        } else {
+            self.origin[j - 1]
+        }
+    }
+
+    /// Unit axis `z_j` joint `j` turns about or slides along.
+    #[inline]
+    pub fn axis(&self, j: usize) -> Vec3 {
+        self.axis[j]
+    }
+
+    /// End-effector position `r_n4`.
+    #[inline]
+    pub fn end_position(&self) -> Vec3 {
+        if self.n == 0 {
+            Vec3::zeros()
+        } else {
+            self.origin[self.n - 1]
+        }
+    }
+
+    /// End-effector orientation (columns `r_n1..r_n3`).
+    #[inline]
+    pub fn end_rotation(&self) -> &Mat3 {
+        &self.end_rotation
+    }
+}
+
+/// Computes every frame of `robot` at `q` into `frames` (eqs. 5-6).
+///
+/// `q` must hold `robot.len()` values (the caller validated it); extra values
+/// are ignored and missing ones are treated as the end of the chain.
+/// Cost: one `sincosf` per revolute joint and about 40 flops per joint.
+pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &mut Frames<N>) {
+    let mut rot = Mat3::identity();
+    let mut o = Vec3::zeros();
+    let mut n = 0;
+    for (((joint, link), &qj), (origin, axis)) in robot
+        .joints()
+        .iter()
+        .zip(robot.links())
+        .zip(q)
+        .zip(frames.origin.iter_mut().zip(frames.axis.iter_mut()))
+    {
+        let x = rot.column(0).into_owned();
+        let y = rot.column(1).into_owned();
+        let z = rot.column(2).into_owned();
+        *axis = z;
+        let (ct, st, d) = match joint.kind {
+            JointKind::Revolute => {
+                let (s, c) = libm::sincosf(qj);
+                (c, s, joint.d)
+            }
+            JointKind::Prismatic => (link.cos_theta, link.sin_theta, qj),
+        };
+        // Columns of R_{k-1} Rot_z(theta) Rot_x(alpha).
+        let xk = x * ct + y * st;
+        let yt = y * ct - x * st;
+        let yk = yt * link.cos_alpha + z * link.sin_alpha;
+        let zk = z * link.cos_alpha - yt * link.sin_alpha;
+        o += z * d + xk * joint.a;
+        *origin = o;
+        rot = Mat3::from_columns(&[xk, yk, zk]);
+        n += 1;
+    }
+    frames.n = n;
+    frames.end_rotation = rot;
+}
+
+/// `J_p^T f` for a force `f` at the end effector: `out[j] = z_j . ((p - o_j) x f)`
+/// (revolute) or `z_j . f` (prismatic). `out` must hold `frames.len()` values.
+pub fn end_point_force<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    force: &Vec3,
+    out: &mut [f32],
+) {
+    let p = frames.end_position();
+    for (j, (joint, out)) in robot.joints().iter().zip(out.iter_mut()).enumerate() {
+        let z = frames.axis(j);
+        *out = match joint.kind {
+            JointKind::Revolute => z.dot(&(p - frames.pivot(j)).cross(force)),
+            JointKind::Prismatic => z.dot(force),
+        };
+    }
+}
+
+/// `J_u^T e` for an error `e` on the end-effector direction `u` (a column of
+/// its rotation): `out[j] = z_j . (u x e)` (revolute) or `0` (prismatic).
+pub fn end_direction_error<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    u: &Vec3,
+    e: &Vec3,
+    out: &mut [f32],
+) {
+    let w = u.cross(e);
+    for (j, (joint, out)) in robot.joints().iter().zip(out.iter_mut()).enumerate() {
+        *out = match joint.kind {
+            JointKind::Revolute => frames.axis(j).dot(&w),
+            JointKind::Prismatic => 0.0,
+        };
+    }
+}
+
+/// End-effector twist for a joint rate: linear velocity `v = sum_j qdot_j dp/dq_j`
+/// (length units per second) and angular velocity `w = sum_revolute qdot_j z_j`
+/// (radians per second). O(n); `J qdot` without forming `J`.
+pub fn end_twist<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    rate: &[f32],
+) -> (Vec3, Vec3) {
+    let p = frames.end_position();
+    let mut v = Vec3::zeros();
+    let mut w = Vec3::zeros();
+    for (j, (joint, &r)) in robot.joints().iter().zip(rate).enumerate() {
+        let z = frames.axis(j);
+        match joint.kind {
+            JointKind::Revolute => {
+                w += z * r;
+                v += z.cross(&(p - frames.pivot(j))) * r;
+            }
+            JointKind::Prismatic => v += z * r,
+        }
+    }
+    (v, w)
+}
+
+/// Squared weighted size of each Jacobian column, into `out`: for joint `j`,
+/// `|dp/dq_j|^2 + lambda^2 sum_i |du_i/dq_j|^2` = `|z x (p - o)|^2 + 2 lambda^2`
+/// (revolute) or `1` (prismatic). Their gain-weighted sum bounds the largest
+/// eigenvalue of `J M J^T` (it is its trace). O(n).
+pub fn column_sizes<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    orientation_scale: f32,
+    out: &mut [f32],
+) {
+    let p = frames.end_position();
+    let rot = 2.0 * orientation_scale * orientation_scale;
+    for (j, (joint, out)) in robot.joints().iter().zip(out.iter_mut()).enumerate() {
+        *out = match joint.kind {
+            JointKind::Revolute => {
+                let c = frames.axis(j).cross(&(p - frames.pivot(j)));
+                c.dot(&c) + rot
+            }
+            JointKind::Prismatic => 1.0,
+        };
+    }
+}

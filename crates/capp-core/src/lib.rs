@@ -1,0 +1,70 @@
+//! # capp-core: the CAPP planner, `no_std`, allocation-free, `f32`
+//!
+//! A collision-avoiding path planner for highly redundant ("serpentine")
+//! manipulators, after R. M. Byers, *Automated Path Planning of the Payload
+//! Inspection and Processing System* (NASA/UCF). Equation numbers in the docs
+//! refer to that paper.
+//!
+//! The crate is split the way rigid-body libraries split it: an immutable
+//! description of the problem, checked once, and a mutable workspace that the
+//! per-step algorithms write into.
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`robot`] | the Denavit-Hartenberg chain, joint kinds, limits, rates, weights (eq. 5) |
+//! | [`pips`] | the 18-joint PIPS of Table 1 as a preset |
+//! | [`kinematics`] | forward kinematics and exact Jacobian-transpose products (eqs. 6, 14) |
+//! | [`obstacle`] | super-ellipsoid obstacles, their inside-outside function and its gradient (eq. 25) |
+//! | [`avoidance`] | avoidance points on the arm, the potential of eq. 26 and its joint-space gradient (eq. 20) |
+//! | [`control`] | the Lyapunov law (eqs. 11-15) and the joint weighting (eq. 18) |
+//! | [`projection`] | keeping the joint rate orthogonal to the obstacle gradient (eqs. 22-24) |
+//! | [`mission`] | waypoints, tolerances and planner settings |
+//! | [`scenario`] | robot + obstacles + mission, validated together |
+//! | [`planner`] | the per-step state machine: rates, step size, integration, outcome |
+//! | [`setpoint`] | decimation of the joint stream, as the listing's `joints.dat` |
+//!
+//! Units: angles in radians, lengths in whatever unit the robot is described in
+//! (PIPS: inches), time in seconds. Rates are per second.
+//!
+//! ## Rules
+//!
+//! * Nothing here allocates; capacities are const generics (`N` joints, `M`
+//!   obstacles, `W` waypoints) and a full container is an error value.
+//! * Nothing here panics on any input: values from outside are checked by the
+//!   constructors ([`robot::Robot::new`], [`scenario::Scenario::new`],
+//!   [`planner::Planner::new`]) and the algorithms then work on valid values.
+//!   Indexing inside the algorithms is by counts that validation bounded.
+//! * Work per [`planner::Planner::step`] is bounded by the joint, point and
+//!   obstacle counts (and a fixed number of step halvings); no loop depends on
+//!   the data's values.
+//! * Every transcendental goes through `libm`, so the same inputs give the same
+//!   bits on the host and on a Cortex-M4F.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod avoidance;
+pub mod control;
+pub mod kinematics;
+pub mod math;
+pub mod mission;
+pub mod obstacle;
+pub mod pips;
+pub mod planner;
+pub mod projection;
+pub mod robot;
+pub mod scenario;
+pub mod setpoint;
+
+pub use mission::{Mission, MissionError, Settings, Waypoint};
+pub use obstacle::{ObstacleError, SuperEllipsoid};
+pub use planner::{Outcome, Phase, Planner, StartError, StepReport};
+pub use robot::{Joint, JointKind, Robot, RobotError};
+pub use scenario::{Scenario, ScenarioError};
+pub use setpoint::SetpointFilter;
+
+/// Largest chain the crate is tested with; capacities above it work but are untested.
+pub const TESTED_MAX_JOINTS: usize = 32;

@@ -1,0 +1,274 @@
+//! What the planner is asked to do: waypoints (the last one the target),
+//! tolerances, step size, caps and the settings of every stage.
+//!
+//! A waypoint is a position and, optionally, an orientation (a rotation
+//! matrix, rows as the listing reads them). The planner drives to each in turn;
+//! a waypoint is passed when the position error is within
+//! `position_tolerance` and (if it has an orientation) the orientation error
+//! `sqrt(|e_1|^2 + |e_2|^2 + |e_3|^2)` within `orientation_tolerance` (the
+//! listing's 0.4).
+
+use crate::avoidance::AvoidanceSettings;
+use crate::control::LawSettings;
+
+/// A point to pass through, or the final target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Waypoint {
+    /// Position of the end effector, length units.
+    pub position: [f32; 3],
+    /// Orientation as a rotation matrix, row by row (`r11 r12 r13 / r21 ...`),
+    /// or `None` when any orientation will do.
+    pub orientation: Option<[[f32; 3]; 3]>,
+}
+
+impl Waypoint {
+    /// A position-only waypoint.
+    pub const fn at(position: [f32; 3]) -> Self {
+        Waypoint {
+            position,
+            orientation: None,
+        }
+    }
+
+    /// A waypoint with an orientation (rows of the rotation matrix).
+    pub const fn pose(position: [f32; 3], rows: [[f32; 3]; 3]) -> Self {
+        Waypoint {
+            position,
+            orientation: Some(rows),
+        }
+    }
+}
+
+/// Every setting of the planner. `Default` gives values sized for PIPS in inches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// Largest integration step `h`, seconds (the listing's `step`).
+    pub time_step_s: f32,
+    /// Position error (length units) under which the step is cut to
+    /// `fine_step_fraction * time_step_s` (the listing: `10 * step`, then `step / 4`).
+    pub fine_radius: f32,
+    /// Fraction of the step used inside `fine_radius`, in `(0, 1]` (listing: 0.25).
+    pub fine_step_fraction: f32,
+    /// Position tolerance, length units.
+    pub position_tolerance: f32,
+    /// Orientation tolerance (root sum square of the column errors; listing: 0.4).
+    pub orientation_tolerance: f32,
+    /// The control law's weights and approach radii.
+    pub law: LawSettings,
+    /// Avoidance points, margins and influence distance.
+    pub avoidance: AvoidanceSettings,
+    /// Iteration cap: the run ends `Capped` after this many steps.
+    pub max_steps: u32,
+    /// Dead-end detection: `Stalled` when `V` has not reached a new low by
+    /// `stall_progress` (relative) within this many steps.
+    pub stall_window: u32,
+    /// Relative decrease of `V` that counts as progress, in `[0, 1)`.
+    pub stall_progress: f32,
+    /// Most halvings of a step that would enter an obstacle or raise `V`, 0 to 16.
+    pub max_halvings: u8,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            time_step_s: 0.05,
+            fine_radius: 1.0,
+            fine_step_fraction: 0.25,
+            position_tolerance: 0.1,
+            orientation_tolerance: 0.05,
+            law: LawSettings::default(),
+            avoidance: AvoidanceSettings::default(),
+            max_steps: 20_000,
+            stall_window: 400,
+            stall_progress: 0.01,
+            max_halvings: 8,
+        }
+    }
+}
+
+/// Which setting an error is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SettingsField {
+    /// `time_step_s`
+    TimeStep,
+    /// `fine_radius`
+    FineRadius,
+    /// `fine_step_fraction`
+    FineStepFraction,
+    /// `position_tolerance`
+    PositionTolerance,
+    /// `orientation_tolerance`
+    OrientationTolerance,
+    /// `law.orientation_scale`
+    OrientationScale,
+    /// `law.approach_radius`
+    ApproachRadius,
+    /// `avoidance.joint_margin` or `avoidance.link_margin`
+    Margin,
+    /// `avoidance.points_per_link`
+    PointsPerLink,
+    /// `avoidance.influence_distance`
+    InfluenceDistance,
+    /// `max_steps`
+    MaxSteps,
+    /// `stall_window`
+    StallWindow,
+    /// `stall_progress`
+    StallProgress,
+    /// `max_halvings`
+    MaxHalvings,
+}
+
+impl core::fmt::Display for SettingsField {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            SettingsField::TimeStep => "time_step_s must be positive and finite",
+            SettingsField::FineRadius => "fine_radius must be non-negative and finite",
+            SettingsField::FineStepFraction => "fine_step_fraction must be in (0, 1]",
+            SettingsField::PositionTolerance => "position_tolerance must be positive and finite",
+            SettingsField::OrientationTolerance => {
+                "orientation_tolerance must be positive and finite"
+            }
+            SettingsField::OrientationScale => {
+                "orientation_scale must be non-negative and at most 1e4"
+            }
+            SettingsField::ApproachRadius => "approach_radius must be non-negative and finite",
+            SettingsField::Margin => "margins must be non-negative and at most 1e4",
+            SettingsField::PointsPerLink => "points_per_link must be 1 to 8",
+            SettingsField::InfluenceDistance => {
+                "influence_distance must be non-negative and at most 1e4"
+            }
+            SettingsField::MaxSteps => "max_steps must be at least 1",
+            SettingsField::StallWindow => "stall_window must be at least 1",
+            SettingsField::StallProgress => "stall_progress must be in [0, 1)",
+            SettingsField::MaxHalvings => "max_halvings must be at most 16",
+        })
+    }
+}
+
+/// Why a mission was rejected. `waypoint` is 0-based.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionError {
+    /// No waypoints: there is no target.
+    NoWaypoints,
+    /// More waypoints than the capacity `W`.
+    TooManyWaypoints {
+        /// Capacity.
+        capacity: usize,
+    },
+    /// A waypoint has a NaN or infinite coordinate, or one beyond 1e4.
+    BadPosition {
+        /// The waypoint.
+        waypoint: u8,
+    },
+    /// A waypoint's orientation is not a rotation matrix (orthonormal, det +1).
+    NotARotation {
+        /// The waypoint.
+        waypoint: u8,
+    },
+    /// A setting is out of its range.
+    BadSetting(SettingsField),
+}
+
+impl core::fmt::Display for MissionError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            MissionError::NoWaypoints => write!(f, "no waypoints: there is no target"),
+            MissionError::TooManyWaypoints { capacity } => {
+                write!(f, "more waypoints than the capacity of {capacity}")
+            }
+            MissionError::BadPosition { waypoint } => write!(
+                f,
+                "waypoint {}: position is not finite or farther than 1e4",
+                waypoint as u32 + 1
+            ),
+            MissionError::NotARotation { waypoint } => write!(
+                f,
+                "waypoint {}: orientation is not a rotation matrix",
+                waypoint as u32 + 1
+            ),
+            MissionError::BadSetting(field) => write!(f, "bad setting: {field}"),
+        }
+    }
+}
+
+impl Settings {
+    /// Checks every setting's range.
+    pub fn validate(&self) -> Result<(), MissionError> {
+        use SettingsField as F;
+        let positive = |x: f32| x.is_finite() && x > 0.0;
+        let non_negative = |x: f32| x.is_finite() && x >= 0.0;
+        let checks = [
+            (positive(self.time_step_s), F::TimeStep),
+            (non_negative(self.fine_radius), F::FineRadius),
+            (
+                positive(self.fine_step_fraction) && self.fine_step_fraction <= 1.0,
+                F::FineStepFraction,
+            ),
+            (positive(self.position_tolerance), F::PositionTolerance),
+            (
+                positive(self.orientation_tolerance),
+                F::OrientationTolerance,
+            ),
+            (
+                non_negative(self.law.orientation_scale) && self.law.orientation_scale <= 1e4,
+                F::OrientationScale,
+            ),
+            (non_negative(self.law.approach_radius), F::ApproachRadius),
+            (
+                non_negative(self.avoidance.joint_margin)
+                    && non_negative(self.avoidance.link_margin)
+                    && self.avoidance.joint_margin <= 1e4
+                    && self.avoidance.link_margin <= 1e4,
+                F::Margin,
+            ),
+            (
+                (1..=8).contains(&self.avoidance.points_per_link),
+                F::PointsPerLink,
+            ),
+            (
+                non_negative(self.avoidance.influence_distance)
+                    && self.avoidance.influence_distance <= 1e4,
+                F::InfluenceDistance,
+            ),
+            (self.max_steps >= 1, F::MaxSteps),
+            (self.stall_window >= 1, F::StallWindow),
+            (
+                self.stall_progress.is_finite()
+                    && self.stall_progress >= 0.0
+                    && self.stall_progress < 1.0,
+                F::StallProgress,
+            ),
+            (self.max_halvings <= 16, F::MaxHalvings),
+        ];
+        match checks.iter().find(|(ok, _)| !ok) {
+            Some((_, field)) => Err(MissionError::BadSetting(*field)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Waypoints and settings, as a user gives them (validated by [`crate::Scenario::new`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mission<const W: usize> {
+    /// Waypoints in order; the last is the target.
+    pub waypoints: heapless::Vec<Waypoint, W>,
+    /// Settings.
+    pub settings: Settings,
+}
+
+impl<const W: usize> Mission<W> {
+    /// A mission through `waypoints` with `settings`; fails if there are more than `W`.
+    pub fn new(waypoints: &[Waypoint], settings: Settings) -> Result<Self, MissionError> {
+        let waypoints = heapless::Vec::from_slice(waypoints)
+            .map_err(|_| MissionError::TooManyWaypoints { capacity: W })?;
+        Ok(Mission {
+            waypoints,
+            settings,
+        })
+    }
+}

@@ -1,0 +1,487 @@
+//! Super-ellipsoid obstacles (paper eq. 25).
+//!
+//! Obstacle `j` has centre `c`, semi-axes `(a, b, c)`, exponents
+//! `(k_x, k_y, k_z) >= 1` and an orientation `R = Rz(rz) Ry(ry) Rx(rx)` from 1-2-3
+//! Euler angles (radians). A world point `p` is `x = R^T (p - c)` in the
+//! obstacle's frame (CAPP.c rotated `p` about the world origin instead, and
+//! cumulatively; that is its bug, not the method) and
+//!
+//! ```text
+//! C(p) = |x/a|^kx + |y/b|^ky + |z/c|^kz          (eq. 25)
+//! ```
+//!
+//! is 1 on the surface, below 1 inside. Exponents 1 give an octahedron, 2 an
+//! ellipsoid, 8 nearly a box. The absolute values make odd and real exponents
+//! behave (the listing's `pow` without them only works for even integers).
+//!
+//! Avoidance points see the obstacle *inflated* by a clearance margin for the
+//! arm's thickness: the semi-axes grow by the margin of the point's kind
+//! ([`PointKind`]), as the listing's `+6.0` at joints and `+3.0` at link
+//! mid-points. Points farther than an influence distance outside the inflated
+//! box are not evaluated at all (they are provably outside, `C > 1`).
+//!
+//! Integer exponents up to 32 take a multiply-only fast path; others use `powf`.
+//! `C` is never NaN: terms are non-negative and an overflowing one is `inf`, and
+//! any `C` above [`C_CUTOFF`] is treated as "out of influence".
+
+use crate::math::{rotation_123, vec3, Mat3, Vec3};
+
+/// Largest `C` that still counts as "within influence"; the potential `1/(C-1)`
+/// there is below `1e-6` and its gradient negligible.
+pub const C_CUTOFF: f32 = 1.0e6;
+/// Largest accepted exponent.
+pub const MAX_EXPONENT: f32 = 64.0;
+/// Smallest accepted semi-axis, length units.
+pub const MIN_SEMI_AXIS: f32 = 1.0e-3;
+/// Largest accepted semi-axis and centre coordinate, length units.
+pub const MAX_EXTENT: f32 = 1.0e4;
+
+/// A super-ellipsoid as a user describes it (not yet validated).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SuperEllipsoid {
+    /// Centre `(x, y, z)`, length units.
+    pub centre: [f32; 3],
+    /// Semi-axes `(a, b, c)` along the obstacle's own axes, length units, > 0.
+    pub semi_axes: [f32; 3],
+    /// Exponents `(k_x, k_y, k_z)`, each in `[1, 64]`.
+    pub exponents: [f32; 3],
+    /// 1-2-3 Euler angles `(rx, ry, rz)`, radians: `R = Rz(rz) Ry(ry) Rx(rx)`.
+    pub euler_123: [f32; 3],
+}
+
+impl SuperEllipsoid {
+    /// An axis-aligned super-ellipsoid with the same exponent on every axis.
+    pub fn aligned(centre: [f32; 3], semi_axes: [f32; 3], exponent: f32) -> Self {
+        SuperEllipsoid {
+            centre,
+            semi_axes,
+            exponents: [exponent; 3],
+            euler_123: [0.0; 3],
+        }
+    }
+}
+
+/// Which field of an obstacle an error is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ObstacleField {
+    /// `centre`
+    Centre,
+    /// `semi_axes`
+    SemiAxes,
+    /// `exponents`
+    Exponents,
+    /// `euler_123`
+    Orientation,
+}
+
+/// Why an obstacle was rejected. `obstacle` is 0-based.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ObstacleError {
+    /// More obstacles than the capacity `M`.
+    TooMany {
+        /// Capacity.
+        capacity: usize,
+    },
+    /// A field holds NaN or infinity.
+    NotFinite {
+        /// The obstacle.
+        obstacle: u8,
+        /// The field.
+        field: ObstacleField,
+    },
+    /// A semi-axis outside `[MIN_SEMI_AXIS, MAX_EXTENT]` (zero, negative, tiny or huge).
+    SemiAxisOutOfRange {
+        /// The obstacle.
+        obstacle: u8,
+    },
+    /// A centre coordinate beyond `MAX_EXTENT`.
+    CentreOutOfRange {
+        /// The obstacle.
+        obstacle: u8,
+    },
+    /// An exponent outside `[1, 64]`.
+    ExponentOutOfRange {
+        /// The obstacle.
+        obstacle: u8,
+    },
+}
+
+impl core::fmt::Display for ObstacleField {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ObstacleField::Centre => "centre",
+            ObstacleField::SemiAxes => "semi-axes",
+            ObstacleField::Exponents => "exponents",
+            ObstacleField::Orientation => "orientation",
+        })
+    }
+}
+
+impl core::fmt::Display for ObstacleError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            ObstacleError::TooMany { capacity } => {
+                write!(f, "more obstacles than the capacity of {capacity}")
+            }
+            ObstacleError::NotFinite { obstacle, field } => {
+                write!(f, "obstacle {}: {field} is not finite", obstacle as u32 + 1)
+            }
+            ObstacleError::SemiAxisOutOfRange { obstacle } => write!(
+                f,
+                "obstacle {}: every semi-axis must be between {MIN_SEMI_AXIS} and {MAX_EXTENT}",
+                obstacle as u32 + 1
+            ),
+            ObstacleError::CentreOutOfRange { obstacle } => write!(
+                f,
+                "obstacle {}: centre farther than {MAX_EXTENT} from the base",
+                obstacle as u32 + 1
+            ),
+            ObstacleError::ExponentOutOfRange { obstacle } => write!(
+                f,
+                "obstacle {}: every exponent must be between 1 and {MAX_EXPONENT}",
+                obstacle as u32 + 1
+            ),
+        }
+    }
+}
+
+/// The two kinds of avoidance point, which see different clearance margins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PointKind {
+    /// A joint (frame) origin: the listing's `+6.0` margin.
+    Joint = 0,
+    /// A point inside a link (its mid-point, or extra points): the listing's `+3.0`.
+    Link = 1,
+}
+
+/// An exponent, sorted once into the fast integer path or the general one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Exponent {
+    Integer(u8),
+    Real(f32),
+}
+
+impl Exponent {
+    fn new(k: f32) -> Self {
+        if k == libm::floorf(k) && k <= 32.0 {
+            Exponent::Integer(k as u8)
+        } else {
+            Exponent::Real(k)
+        }
+    }
+
+    /// `(u^k, k u^(k-1))` for `u >= 0`.
+    #[inline]
+    fn power_and_slope(self, u: f32) -> (f32, f32) {
+        match self {
+            Exponent::Integer(k) => {
+                let lower = powi(u, k - 1);
+                (lower * u, k as f32 * lower)
+            }
+            Exponent::Real(k) => {
+                let lower = libm::powf(u, k - 1.0);
+                (lower * u, k * lower)
+            }
+        }
+    }
+}
+
+/// `u^k` by squaring, `k` small.
+#[inline]
+fn powi(mut u: f32, mut k: u8) -> f32 {
+    let mut acc = 1.0;
+    while k > 0 {
+        if k & 1 == 1 {
+            acc *= u;
+        }
+        u *= u;
+        k >>= 1;
+    }
+    acc
+}
+
+/// `C - 1` and `grad_p C` (world frame) at one avoidance point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact {
+    /// `C(p) - 1` of the inflated obstacle: positive outside, 0 on its surface.
+    pub clearance: f32,
+    /// Gradient of `C` with respect to the world point `p`, per length unit.
+    pub gradient: Vec3,
+}
+
+/// A validated obstacle with everything a step needs precomputed.
+#[derive(Clone, Copy, Debug)]
+pub struct Obstacle {
+    source: SuperEllipsoid,
+    centre: Vec3,
+    /// `R` (obstacle axes in world coordinates, as columns).
+    rotation: Mat3,
+    /// `R^T`.
+    rotation_t: Mat3,
+    exponents: [Exponent; 3],
+    /// Per [`PointKind`]: `1 / (semi-axis + margin)`.
+    inv_axes: [Vec3; 2],
+    /// Per [`PointKind`]: half-extents of the influence box, `semi-axis + margin + influence`.
+    reach: [Vec3; 2],
+    /// Per [`PointKind`]: squared radius of the sphere around the influence box.
+    reach_sq: [f32; 2],
+}
+
+impl Obstacle {
+    /// Validates `s` (as obstacle number `index`) and inflates it by the
+    /// margins (joint, link) and the influence distance, all non-negative
+    /// finite lengths already checked by the caller.
+    pub fn new(
+        index: u8,
+        s: &SuperEllipsoid,
+        margins: [f32; 2],
+        influence: f32,
+    ) -> Result<Self, ObstacleError> {
+        let obstacle = index;
+        let not_finite = |field| ObstacleError::NotFinite { obstacle, field };
+        let groups = [
+            (s.centre, ObstacleField::Centre),
+            (s.semi_axes, ObstacleField::SemiAxes),
+            (s.exponents, ObstacleField::Exponents),
+            (s.euler_123, ObstacleField::Orientation),
+        ];
+        for (values, field) in groups {
+            if !values.iter().all(|v| v.is_finite()) {
+                return Err(not_finite(field));
+            }
+        }
+        if !s
+            .semi_axes
+            .iter()
+            .all(|&a| (MIN_SEMI_AXIS..=MAX_EXTENT).contains(&a))
+        {
+            return Err(ObstacleError::SemiAxisOutOfRange { obstacle });
+        }
+        if !s.centre.iter().all(|c| c.abs() <= MAX_EXTENT) {
+            return Err(ObstacleError::CentreOutOfRange { obstacle });
+        }
+        if !s
+            .exponents
+            .iter()
+            .all(|&k| (1.0..=MAX_EXPONENT).contains(&k))
+        {
+            return Err(ObstacleError::ExponentOutOfRange { obstacle });
+        }
+        let [rx, ry, rz] = s.euler_123;
+        let rotation = rotation_123(rx, ry, rz);
+        let axes = vec3(s.semi_axes);
+        let inflate = |margin: f32| axes.add_scalar(margin);
+        let inv_axes = margins.map(|m| inflate(m).map(|x| 1.0 / x));
+        let reach = margins.map(|m| inflate(m).add_scalar(influence));
+        let reach_sq = reach.map(|r| r.dot(&r));
+        Ok(Obstacle {
+            source: *s,
+            centre: vec3(s.centre),
+            rotation,
+            rotation_t: rotation.transpose(),
+            exponents: s.exponents.map(Exponent::new),
+            inv_axes,
+            reach,
+            reach_sq,
+        })
+    }
+
+    /// The obstacle as given.
+    pub fn source(&self) -> &SuperEllipsoid {
+        &self.source
+    }
+
+    /// Centre, world frame.
+    pub fn centre(&self) -> Vec3 {
+        self.centre
+    }
+
+    /// Orientation `R`: the obstacle's axes as world-frame columns.
+    pub fn rotation(&self) -> &Mat3 {
+        &self.rotation
+    }
+
+    /// `C(p) - 1` and its gradient for a point of `kind`, or `None` when the
+    /// point is outside the influence region (then `C > 1` is guaranteed).
+    #[inline]
+    pub fn contact(&self, p: &Vec3, kind: PointKind) -> Option<Contact> {
+        let k = kind as usize;
+        let r = p - self.centre;
+        // Cheap sphere test first: most pairs on a long arm end here.
+        if r.dot(&r) > self.reach_sq[k] {
+            return None;
+        }
+        let x = self.rotation_t * r;
+        let reach = &self.reach[k];
+        if x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z {
+            return None;
+        }
+        let inv = &self.inv_axes[k];
+        let mut c = 0.0;
+        let mut local_gradient = Vec3::zeros();
+        for axis in 0..3 {
+            let u = x[axis].abs() * inv[axis];
+            let (term, slope) = self.exponents[axis].power_and_slope(u);
+            c += term;
+            // d|x|/dx = sign(x); zero at x = 0 (the octahedron's kink).
+            let sign = if x[axis] > 0.0 {
+                1.0
+            } else if x[axis] < 0.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            local_gradient[axis] = slope * inv[axis] * sign;
+        }
+        if c > C_CUTOFF || c.is_nan() {
+            return None;
+        }
+        Some(Contact {
+            clearance: c - 1.0,
+            gradient: self.rotation * local_gradient,
+        })
+    }
+
+    /// `C(p) - 1` with no influence cut-off (for reporting and checks; may be `inf`).
+    pub fn clearance_uncut(&self, p: &Vec3, kind: PointKind) -> f32 {
+        let x = self.rotation_t * (p - self.centre);
+        let inv = &self.inv_axes[kind as usize];
+        let mut c = 0.0;
+        for axis in 0..3 {
+            c += self.exponents[axis]
+                .power_and_slope(x[axis].abs() * inv[axis])
+                .0;
+        }
+        c - 1.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_ball(exponent: f32) -> Obstacle {
+        Obstacle::new(
+            0,
+            &SuperEllipsoid::aligned([1.0, 2.0, 3.0], [1.0, 2.0, 4.0], exponent),
+            [0.0, 0.0],
+            100.0,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn surface_points_have_zero_clearance() {
+        for k in [1.0, 2.0, 2.5, 8.0] {
+            let o = unit_ball(k);
+            for p in [[2.0, 2.0, 3.0], [1.0, 4.0, 3.0], [1.0, 2.0, -1.0]] {
+                let c = o.contact(&vec3(p), PointKind::Joint).unwrap();
+                assert!(c.clearance.abs() < 1e-6, "k={k} p={p:?} {c:?}");
+            }
+            let inside = o.contact(&vec3([1.2, 2.1, 3.0]), PointKind::Joint).unwrap();
+            assert!(inside.clearance < 0.0);
+        }
+    }
+
+    #[test]
+    fn orientation_is_about_the_centre_not_the_world_origin() {
+        // A long thin box rotated 90 degrees about z: its long axis becomes world y.
+        let s = SuperEllipsoid {
+            centre: [10.0, 0.0, 0.0],
+            semi_axes: [5.0, 1.0, 1.0],
+            exponents: [2.0; 3],
+            euler_123: [0.0, 0.0, core::f32::consts::FRAC_PI_2],
+        };
+        let o = Obstacle::new(0, &s, [0.0, 0.0], 10.0).unwrap();
+        let along_y = o
+            .contact(&vec3([10.0, 4.0, 0.0]), PointKind::Joint)
+            .unwrap();
+        assert!(
+            along_y.clearance < 0.0,
+            "inside along the rotated long axis"
+        );
+        let along_x = o
+            .contact(&vec3([14.0, 0.0, 0.0]), PointKind::Joint)
+            .unwrap();
+        assert!(along_x.clearance > 0.0, "outside across it");
+    }
+
+    #[test]
+    fn margins_inflate_by_point_kind() {
+        let o = Obstacle::new(
+            0,
+            &SuperEllipsoid::aligned([0.0; 3], [1.0; 3], 2.0),
+            [6.0, 3.0],
+            1.0,
+        )
+        .unwrap();
+        let p = vec3([5.0, 0.0, 0.0]);
+        assert!(o.contact(&p, PointKind::Joint).unwrap().clearance < 0.0);
+        assert!(o.contact(&p, PointKind::Link).unwrap().clearance > 0.0);
+    }
+
+    #[test]
+    fn large_exponents_and_far_points_give_no_nan() {
+        let o = Obstacle::new(
+            0,
+            &SuperEllipsoid::aligned([0.0; 3], [MIN_SEMI_AXIS; 3], MAX_EXPONENT),
+            [0.0, 0.0],
+            MAX_EXTENT,
+        )
+        .unwrap();
+        for p in [
+            [0.5, 0.0, 0.0],
+            [1.0e4, 0.0, 0.0],
+            [3.0e38, 0.0, 1.0],
+            [0.0; 3],
+        ] {
+            if let Some(c) = o.contact(&vec3(p), PointKind::Link) {
+                assert!(c.clearance.is_finite() && c.gradient.iter().all(|g| g.is_finite()));
+            }
+            assert!(!o.clearance_uncut(&vec3(p), PointKind::Link).is_nan());
+        }
+    }
+
+    #[test]
+    fn integer_fast_path_matches_powf() {
+        for k in 1..=32u8 {
+            for u in [0.0f32, 0.3, 1.0, 1.7] {
+                let (fast, fast_slope) = Exponent::Integer(k).power_and_slope(u);
+                let (slow, slow_slope) = Exponent::Real(k as f32).power_and_slope(u);
+                let tol = 1e-5 * slow.abs().max(1.0);
+                assert!((fast - slow).abs() <= tol, "k={k} u={u}");
+                assert!((fast_slope - slow_slope).abs() <= 1e-5 * slow_slope.abs().max(1.0));
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_bad_obstacles() {
+        let good = SuperEllipsoid::aligned([0.0; 3], [1.0; 3], 2.0);
+        let check = |s: SuperEllipsoid| Obstacle::new(3, &s, [0.0, 0.0], 1.0).unwrap_err();
+        let mut s = good;
+        s.semi_axes[1] = 0.0;
+        assert_eq!(check(s), ObstacleError::SemiAxisOutOfRange { obstacle: 3 });
+        s.semi_axes[1] = -1.0;
+        assert_eq!(check(s), ObstacleError::SemiAxisOutOfRange { obstacle: 3 });
+        let mut s = good;
+        s.centre[0] = f32::NAN;
+        assert_eq!(
+            check(s),
+            ObstacleError::NotFinite {
+                obstacle: 3,
+                field: ObstacleField::Centre
+            }
+        );
+        let mut s = good;
+        s.exponents[2] = 0.5;
+        assert_eq!(check(s), ObstacleError::ExponentOutOfRange { obstacle: 3 });
+        let mut s = good;
+        s.euler_123[0] = f32::INFINITY;
+        assert!(matches!(check(s), ObstacleError::NotFinite { .. }));
+    }
+}

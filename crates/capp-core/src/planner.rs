@@ -1,0 +1,527 @@
+//! The planner: one [`Planner::step`] turns the current joint vector into the
+//! next, following the paper's loop (Fig. 6a) with its open problems closed.
+//!
+//! One step:
+//!
+//! 1. pass every waypoint already within tolerance (the last one ends the run);
+//! 2. `g_i = J_i^T e_i` from the current frames (eqs. 13-14, O(n));
+//! 3. the weighted rate `M eps_hat` (eqs. 15, 18; see [`crate::control`]);
+//! 4. the one-sided projection against the obstacle gradient (eq. 24, see
+//!    [`crate::projection`]), then a uniform scale into the joints' rate limits;
+//! 5. the step size `h` by the listing's rule: `h_max` far from the target,
+//!    `|err / err_dot| h_max` when the last step's change would overshoot,
+//!    `fine_step_fraction * h_max` within `fine_radius`; and at most
+//!    `V / (G . qdot)`, the step that would remove all of `V` to first order;
+//! 6. Euler integration `q' = clamp(q + h qdot)` (clamped into the limits) and a
+//!    full evaluation of `q'` (frames, errors, potential gradient, clearance);
+//! 7. acceptance: every avoidance point strictly outside every inflated
+//!    obstacle, and, unless the projection constrained the motion, `V` not
+//!    above its current value. Otherwise `h` is halved (at most `max_halvings`
+//!    times); a step with no acceptable size is not taken (Euler overshoot is
+//!    shortened, never taken);
+//! 8. dead-end detection: `Stalled` when `V` has made no new low (by
+//!    `stall_progress`) within `stall_window` steps; `Capped` at `max_steps`.
+//!
+//! The accepted evaluation is kept for the next step, so a step costs one
+//! forward pass, one potential sweep and O(n) algebra, plus one more pass per
+//! halving. Nothing allocates; the planner is a fixed-size value.
+
+use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
+use crate::control::{
+    descent_rate, lyapunov_terms, pose_error, weighted_rate, Drive, PoseError, Target,
+};
+use crate::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
+use crate::math::{all_finite, dot_slice};
+use crate::projection::{limit_rates, project};
+use crate::robot::Robot;
+use crate::scenario::Scenario;
+
+/// Fraction of the Gauss-Newton step taken (see `step`).
+pub const STEP_FRACTION: f32 = 0.5;
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Outcome {
+    /// The last waypoint was reached within tolerance.
+    Reached,
+    /// No progress in `V` over the stall window: a dead end, an unreachable
+    /// target, or a target inside an obstacle.
+    Stalled,
+    /// The iteration cap was hit while still progressing.
+    Capped,
+}
+
+/// Where the planner is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Driving toward the waypoint with this index.
+    Moving {
+        /// Active waypoint (0-based).
+        waypoint: u8,
+    },
+    /// Finished.
+    Done(Outcome),
+}
+
+/// Why a planner could not start, or could not take a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StartError {
+    /// The start vector's length is not the robot's joint count.
+    WrongLength {
+        /// Values given.
+        given: usize,
+        /// Joints of the robot.
+        joints: usize,
+    },
+    /// A start value is NaN or infinite.
+    NotFinite {
+        /// The joint (0-based).
+        joint: u8,
+    },
+    /// A start value is outside the joint's limits.
+    OutsideLimits {
+        /// The joint (0-based).
+        joint: u8,
+    },
+    /// An avoidance point starts inside (or on) an inflated obstacle.
+    InObstacle {
+        /// Avoidance point id.
+        point: u16,
+        /// Obstacle index.
+        obstacle: u8,
+    },
+    /// `step` was given a scenario with another joint count than `new`.
+    ScenarioMismatch,
+}
+
+impl core::fmt::Display for StartError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            StartError::WrongLength { given, joints } => {
+                write!(
+                    f,
+                    "start configuration has {given} values for {joints} joints"
+                )
+            }
+            StartError::NotFinite { joint } => {
+                write!(f, "start value of joint {} is not finite", joint as u32 + 1)
+            }
+            StartError::OutsideLimits { joint } => {
+                write!(
+                    f,
+                    "start value of joint {} is outside its limits",
+                    joint as u32 + 1
+                )
+            }
+            StartError::InObstacle { point, obstacle } => write!(
+                f,
+                "start configuration puts avoidance point {point} inside obstacle {}",
+                obstacle as u32 + 1
+            ),
+            StartError::ScenarioMismatch => {
+                write!(f, "the scenario does not match the planner's robot")
+            }
+        }
+    }
+}
+
+/// What one step did, and where the arm now is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StepReport {
+    /// Steps taken so far (this one included).
+    pub step: u32,
+    /// Integration step used, seconds (0 when no step could be taken).
+    pub time_step_s: f32,
+    /// `V` of eq. 12 at the new configuration, for the active waypoint.
+    pub v: f32,
+    /// Position error, length units.
+    pub position_error: f32,
+    /// Orientation error (root sum square of the column errors).
+    pub orientation_error: f32,
+    /// Closest avoidance point / obstacle pair within influence.
+    pub clearance: Option<Clearance>,
+    /// Phase after this step (the active waypoint while moving).
+    pub phase: Phase,
+    /// Whether the obstacle projection changed the rate.
+    pub constrained: bool,
+    /// How many times the step was halved.
+    pub halvings: u8,
+}
+
+/// Everything known about one configuration.
+#[derive(Clone, Debug)]
+struct Evaluation<const N: usize> {
+    frames: Frames<N>,
+    error: PoseError,
+    mu: [f32; N],
+    field: ObstacleField,
+}
+
+impl<const N: usize> Evaluation<N> {
+    fn new() -> Self {
+        Evaluation {
+            frames: Frames::default(),
+            error: PoseError::default(),
+            mu: [0.0; N],
+            field: ObstacleField::default(),
+        }
+    }
+
+    fn evaluate<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        q: &[f32],
+        target: &Target,
+    ) {
+        let robot = scenario.robot();
+        forward_kinematics(robot, q, &mut self.frames);
+        self.error = pose_error(
+            &self.frames,
+            target,
+            scenario.settings().law.orientation_scale,
+        );
+        self.field = potential_gradient(
+            robot,
+            &self.frames,
+            scenario.obstacles(),
+            &scenario.settings().avoidance,
+            &mut self.mu,
+        );
+    }
+}
+
+/// The planner's mutable state: the joint vector and every buffer a step
+/// needs, sized once for `N` joints. The model ([`Scenario`]) is passed to
+/// each call, never stored.
+#[derive(Clone, Debug)]
+pub struct Planner<const N: usize> {
+    n: usize,
+    q: [f32; N],
+    now: Evaluation<N>,
+    next: Evaluation<N>,
+    q_next: [f32; N],
+    terms: [[f32; N]; 4],
+    drive: [f32; N],
+    rate: [f32; N],
+    gain: [f32; N],
+    locked: [bool; N],
+    step: u32,
+    phase: Phase,
+    /// Position error change over the last step (the listing's `error_step`).
+    error_step: f32,
+    best_v: f32,
+    best_step: u32,
+    last: StepReport,
+}
+
+impl<const N: usize> Planner<N> {
+    /// Starts a plan from `start` (one value per joint, within limits, every
+    /// avoidance point outside every inflated obstacle).
+    pub fn new<const M: usize, const W: usize>(
+        scenario: &Scenario<N, M, W>,
+        start: &[f32],
+    ) -> Result<Self, StartError> {
+        let robot = scenario.robot();
+        let n = robot.len();
+        if start.len() != n {
+            return Err(StartError::WrongLength {
+                given: start.len(),
+                joints: n,
+            });
+        }
+        if let Some(joint) = start.iter().position(|x| !x.is_finite()) {
+            return Err(StartError::NotFinite { joint: joint as u8 });
+        }
+        if let Some(joint) = robot.first_outside_limits(start) {
+            return Err(StartError::OutsideLimits { joint: joint as u8 });
+        }
+        let mut q = [0.0; N];
+        q[..n].copy_from_slice(start);
+        let mut planner = Planner {
+            n,
+            q,
+            now: Evaluation::new(),
+            next: Evaluation::new(),
+            q_next: q,
+            terms: [[0.0; N]; 4],
+            drive: [0.0; N],
+            rate: [0.0; N],
+            gain: [0.0; N],
+            locked: [false; N],
+            step: 0,
+            phase: Phase::Moving { waypoint: 0 },
+            error_step: 0.0,
+            best_v: f32::INFINITY,
+            best_step: 0,
+            last: StepReport {
+                step: 0,
+                time_step_s: 0.0,
+                v: 0.0,
+                position_error: 0.0,
+                orientation_error: 0.0,
+                clearance: None,
+                phase: Phase::Moving { waypoint: 0 },
+                constrained: false,
+                halvings: 0,
+            },
+        };
+        let target = scenario.targets()[0];
+        planner.now.evaluate(scenario, &planner.q[..n], &target);
+        if !planner.now.field.clear {
+            let c = planner.now.field.clearance.unwrap_or(Clearance {
+                value: 0.0,
+                point: 0,
+                obstacle: 0,
+            });
+            return Err(StartError::InObstacle {
+                point: c.point,
+                obstacle: c.obstacle,
+            });
+        }
+        planner.best_v = planner.now.error.v;
+        planner.last = planner.report(0.0, false, 0);
+        Ok(planner)
+    }
+
+    /// The current joint vector (`n` values: radians or length units).
+    pub fn joints(&self) -> &[f32] {
+        &self.q[..self.n]
+    }
+
+    /// The joint rate of the last step (per second), after projection and limits.
+    pub fn rates(&self) -> &[f32] {
+        &self.rate[..self.n]
+    }
+
+    /// Frames of the current configuration.
+    pub fn frames(&self) -> &Frames<N> {
+        &self.now.frames
+    }
+
+    /// Current obstacle gradient `mu = dP/dq` (eq. 20).
+    pub fn obstacle_gradient(&self) -> &[f32] {
+        &self.now.mu[..self.n]
+    }
+
+    /// Current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The report of the last step (or of the start).
+    pub fn last_report(&self) -> &StepReport {
+        &self.last
+    }
+
+    /// Whether the run has ended.
+    pub fn is_done(&self) -> bool {
+        matches!(self.phase, Phase::Done(_))
+    }
+
+    fn report(&self, h: f32, constrained: bool, halvings: u8) -> StepReport {
+        StepReport {
+            step: self.step,
+            time_step_s: h,
+            v: self.now.error.v,
+            position_error: self.now.error.position,
+            orientation_error: self.now.error.orientation,
+            clearance: self.now.field.clearance,
+            phase: self.phase,
+            constrained,
+            halvings,
+        }
+    }
+
+    /// Moves on past every waypoint within tolerance of the current pose.
+    fn pass_waypoints<const M: usize, const W: usize>(&mut self, scenario: &Scenario<N, M, W>) {
+        let settings = scenario.settings();
+        let targets = scenario.targets();
+        while let Phase::Moving { waypoint } = self.phase {
+            let e = &self.now.error;
+            let within = e.position <= settings.position_tolerance
+                && (!e.has_orientation || e.orientation <= settings.orientation_tolerance);
+            if !within {
+                return;
+            }
+            let next = waypoint as usize + 1;
+            if next >= targets.len() {
+                self.phase = Phase::Done(Outcome::Reached);
+                return;
+            }
+            self.phase = Phase::Moving {
+                waypoint: next as u8,
+            };
+            self.now.error = pose_error(
+                &self.now.frames,
+                &targets[next],
+                settings.law.orientation_scale,
+            );
+            self.best_v = self.now.error.v;
+            self.best_step = self.step;
+            self.error_step = 0.0;
+        }
+    }
+
+    /// Takes one planning step. Returns the report; a finished planner returns
+    /// its final report again without moving.
+    pub fn step<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+    ) -> Result<StepReport, StartError> {
+        let robot: &Robot<N> = scenario.robot();
+        if robot.len() != self.n {
+            return Err(StartError::ScenarioMismatch);
+        }
+        let n = self.n;
+        let settings = *scenario.settings();
+        self.pass_waypoints(scenario);
+        let waypoint = match self.phase {
+            Phase::Done(_) => {
+                self.last = self.report(0.0, false, 0);
+                return Ok(self.last);
+            }
+            Phase::Moving { waypoint } => waypoint as usize,
+        };
+        let Some(target) = scenario.targets().get(waypoint).copied() else {
+            return Err(StartError::ScenarioMismatch);
+        };
+        if self.step >= settings.max_steps {
+            self.phase = Phase::Done(Outcome::Capped);
+            self.last = self.report(0.0, false, 0);
+            return Ok(self.last);
+        }
+
+        // Rates (eqs. 13-15, 18, 24).
+        lyapunov_terms(robot, &self.now.frames, &self.now.error, &mut self.terms);
+        let drive = weighted_rate(
+            robot,
+            &self.q[..n],
+            &self.now.error,
+            &self.terms,
+            &settings.law,
+            &mut self.drive,
+            &mut self.rate,
+            &mut self.gain,
+        );
+        let constrained = project(
+            robot,
+            &self.q[..n],
+            &self.now.mu[..n],
+            &mut self.rate[..n],
+            &mut self.locked[..n],
+        );
+        limit_rates(robot, &mut self.rate[..n]);
+        if !all_finite(&self.rate[..n]) {
+            self.rate[..n].fill(0.0);
+        }
+
+        // Step size: the listing's rule.
+        let h_max = settings.time_step_s;
+        let err = self.now.error.position;
+        let mut h = if err > settings.fine_radius {
+            if err > self.error_step.abs() {
+                h_max
+            } else {
+                (err / self.error_step).abs() * h_max
+            }
+        } else {
+            settings.fine_step_fraction * h_max
+        };
+        // And never predict removing more than all of V in one step: to first
+        // order V(h) = V - h G.qdot, and past h = V / G.qdot the step overshoots.
+        let descent = descent_rate(&self.terms, &settings.law, &self.rate[..n]);
+        if descent > 0.0 {
+            // Gauss-Newton step along the rate: V(h) ~ 1/2 |e - h J qdot|^2 is
+            // least at h = G.qdot / |J qdot|^2 (orientation rows weighted by
+            // lambda^2; sum_i |w x u_i|^2 = 2 |w|^2 for an orthonormal frame).
+            let (v, w) = end_twist(robot, &self.now.frames, &self.rate[..n]);
+            let lambda = settings.law.orientation_scale;
+            let speed_sq = v.dot(&v) + 2.0 * lambda * lambda * w.dot(&w);
+            if speed_sq > 0.0 {
+                h = h.min(STEP_FRACTION * descent / speed_sq);
+            }
+        }
+        // No mode of the linearised error may overshoot: with rate = gain o G,
+        // e' = -J diag(gain) J^T e, whose largest eigenvalue is at most the
+        // trace sum_j gain_j |J_j|^2. Keeping h below its inverse makes every
+        // mode decay without changing sign, so the rates do not chatter.
+        column_sizes(
+            robot,
+            &self.now.frames,
+            settings.law.orientation_scale,
+            &mut self.drive[..n],
+        );
+        let stiffness = dot_slice(&self.gain[..n], &self.drive[..n]);
+        if stiffness > 0.0 {
+            h = h.min(1.0 / stiffness);
+        }
+
+        // Integrate, evaluate, accept or halve.
+        let mut halvings = 0;
+        let mut accepted = false;
+        if drive != Drive::Idle || constrained {
+            loop {
+                for j in 0..n {
+                    let joint = &robot.joints()[j];
+                    self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
+                }
+                self.next.evaluate(scenario, &self.q_next[..n], &target);
+                let safe = self.next.field.clear;
+                let descends = constrained || self.next.error.v <= self.now.error.v;
+                if safe && descends && all_finite(&self.q_next[..n]) {
+                    accepted = true;
+                    break;
+                }
+                if halvings >= settings.max_halvings {
+                    break;
+                }
+                halvings += 1;
+                h *= 0.5;
+            }
+        }
+        self.step += 1;
+        if accepted {
+            core::mem::swap(&mut self.now, &mut self.next);
+            self.q[..n].copy_from_slice(&self.q_next[..n]);
+            self.error_step = self.now.error.position - err;
+        } else {
+            h = 0.0;
+            self.rate[..n].fill(0.0);
+        }
+
+        // Progress and outcome.
+        if self.now.error.v < self.best_v * (1.0 - settings.stall_progress) {
+            self.best_v = self.now.error.v;
+            self.best_step = self.step;
+        }
+        self.pass_waypoints(scenario);
+        if let Phase::Moving { .. } = self.phase {
+            if self.step - self.best_step >= settings.stall_window {
+                self.phase = Phase::Done(Outcome::Stalled);
+            } else if self.step >= settings.max_steps {
+                self.phase = Phase::Done(Outcome::Capped);
+            }
+        }
+        self.last = self.report(h, constrained, halvings);
+        Ok(self.last)
+    }
+
+    /// Runs until done, calling `visit` after every step. Returns the outcome.
+    pub fn run<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        mut visit: impl FnMut(&Self, &StepReport),
+    ) -> Result<Outcome, StartError> {
+        loop {
+            let report = self.step(scenario)?;
+            visit(self, &report);
+            if let Phase::Done(outcome) = report.phase {
+                return Ok(outcome);
+            }
+        }
+    }
+}

@@ -1,0 +1,102 @@
+//! Collision avoidance by projection (paper eqs. 21-24).
+//!
+//! With `mu = dP/dq` the potential's gradient (eq. 20), `dP/dt = mu . qdot`
+//! (eq. 21). The paper removes from the weighted rate its component along
+//! `mu_hat = mu / |mu|`:
+//!
+//! ```text
+//! qdot = (I - mu_hat mu_hat^T) M eps_hat                      (eq. 24)
+//! ```
+//!
+//! after the weighting, as the equation says (CAPP.c projected the Jacobian
+//! before `M`, which matches only for `M = cI`). Two changes:
+//!
+//! * **one-sided**: only a rate that *approaches* the obstacles (`mu . qdot > 0`)
+//!   is projected; motion away from them is left alone.
+//! * **locked joints**: a joint held at a limit cannot take the correction, so
+//!   the projection is done in the subspace of the free joints (`mu_i = 0` for
+//!   locked ones), which keeps `mu . qdot = 0` exact after the integrator clamps.
+//!
+//! Obstacles beyond the influence distance contribute nothing to `mu` (see
+//! [`crate::avoidance`]), so they do not constrain the arm at all.
+
+use crate::robot::Robot;
+
+/// Whether joint `j` at `q` would be pushed past a limit by `rate`.
+#[inline]
+fn blocked(min: f32, max: f32, q: f32, rate: f32) -> bool {
+    (q <= min && rate < 0.0) || (q >= max && rate > 0.0)
+}
+
+/// Projects `rate` (n values) so that it does not approach the obstacles:
+/// afterwards `mu . rate <= 0` over the free joints. `locked` is scratch of `n`
+/// flags. Returns whether the projection changed the rate.
+pub fn project<const N: usize>(
+    robot: &Robot<N>,
+    q: &[f32],
+    mu: &[f32],
+    rate: &mut [f32],
+    locked: &mut [bool],
+) -> bool {
+    let n = robot.len();
+    let joints = robot.joints();
+    let (q, mu, rate, locked) = (&q[..n], &mu[..n], &mut rate[..n], &mut locked[..n]);
+    // A rate into a limit the joint already sits at will be clamped away by the
+    // integrator: drop it now, so the projection sees the motion that happens.
+    for (j, joint) in joints.iter().enumerate() {
+        locked[j] = blocked(joint.min, joint.max, q[j], rate[j]);
+        if locked[j] {
+            rate[j] = 0.0;
+        }
+    }
+    // Two passes: a free joint at a limit that the first correction would push
+    // into it is locked and the correction recomputed. Bounded work.
+    for pass in 0..2 {
+        let approach: f32 = mu.iter().zip(rate.iter()).map(|(m, r)| m * r).sum();
+        let size_sq: f32 = mu
+            .iter()
+            .zip(locked.iter())
+            .filter(|(_, &l)| !l)
+            .map(|(m, _)| m * m)
+            .sum();
+        if !(approach > 0.0 && size_sq > 0.0 && approach.is_finite() && size_sq.is_finite()) {
+            return pass > 0;
+        }
+        let k = approach / size_sq;
+        let mut newly_locked = false;
+        for (j, joint) in joints.iter().enumerate() {
+            if !locked[j] && blocked(joint.min, joint.max, q[j], rate[j] - k * mu[j]) {
+                locked[j] = true;
+                newly_locked = true;
+            }
+        }
+        if newly_locked && pass == 0 {
+            continue;
+        }
+        for j in 0..n {
+            if !locked[j] {
+                rate[j] -= k * mu[j];
+            }
+        }
+        return true;
+    }
+    true
+}
+
+/// Scales `rate` uniformly so that no joint exceeds its rate limit; keeps the
+/// direction (so orthogonality to `mu` and descent survive). Returns the scale.
+pub fn limit_rates<const N: usize>(robot: &Robot<N>, rate: &mut [f32]) -> f32 {
+    let worst = robot
+        .joints()
+        .iter()
+        .zip(rate.iter())
+        .map(|(joint, r)| r.abs() / joint.max_rate)
+        .fold(0.0f32, f32::max);
+    if worst > 1.0 {
+        let k = 1.0 / worst;
+        rate.iter_mut().for_each(|r| *r *= k);
+        k
+    } else {
+        1.0
+    }
+}

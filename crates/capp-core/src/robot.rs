@@ -1,0 +1,392 @@
+//! The manipulator model: a serial chain in standard (distal) Denavit-Hartenberg
+//! form (paper eq. 5), with per-joint limits, rate limits and weights.
+//!
+//! Link `i` (1-based in the paper, `i - 1` here) transforms frame `i-1` to
+//! frame `i`:
+//!
+//! ```text
+//! A_i = Rot_z(theta_i) Trans_z(d_i) Trans_x(a_i) Rot_x(alpha_i)       (eq. 5)
+//! ```
+//!
+//! A revolute joint varies `theta` (radians), a prismatic joint varies `d`
+//! (length units). The joint value `q_i` *is* that variable: the fixed DH
+//! column of a revolute joint is its `d`, of a prismatic one its `theta`.
+//!
+//! Joint rates: `max_rate` bounds `|q_i'|` (radians or length per second).
+//! `weight` in `(0, 1]` scales the joint's share of the motion:
+//! `k_i = weight_i * max_rate_i / 2`, which keeps eq. 18's `k_i <= qdot_max / 2`.
+
+use crate::math::all_finite;
+
+/// What a joint's variable is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum JointKind {
+    /// Rotation about `z_{i-1}`: the variable is `theta`, in radians.
+    Revolute,
+    /// Translation along `z_{i-1}`: the variable is `d`, in length units.
+    Prismatic,
+}
+
+/// One joint and the link after it, as given by a user (not yet validated).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Joint {
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Link twist `alpha`, radians.
+    pub alpha: f32,
+    /// Link length `a`, length units.
+    pub a: f32,
+    /// Fixed joint angle `theta` of a prismatic joint, radians (ignored for revolute joints).
+    pub theta: f32,
+    /// Fixed offset `d` of a revolute joint, length units (ignored for prismatic joints).
+    pub d: f32,
+    /// Lower limit of the joint variable (radians or length units).
+    pub min: f32,
+    /// Upper limit of the joint variable.
+    pub max: f32,
+    /// Largest joint rate magnitude, per second. Must be > 0.
+    pub max_rate: f32,
+    /// Relative weight in `(0, 1]` of this joint in the motion (the listing's `metric`).
+    pub weight: f32,
+}
+
+impl Joint {
+    /// A revolute joint with the given DH constants and limits, weight 1.
+    pub fn revolute(alpha: f32, a: f32, d: f32, min: f32, max: f32, max_rate: f32) -> Self {
+        Joint {
+            kind: JointKind::Revolute,
+            alpha,
+            a,
+            theta: 0.0,
+            d,
+            min,
+            max,
+            max_rate,
+            weight: 1.0,
+        }
+    }
+
+    /// A prismatic joint with the given DH constants and limits, weight 1.
+    pub fn prismatic(alpha: f32, a: f32, theta: f32, min: f32, max: f32, max_rate: f32) -> Self {
+        Joint {
+            kind: JointKind::Prismatic,
+            alpha,
+            a,
+            theta,
+            d: 0.0,
+            min,
+            max,
+            max_rate,
+            weight: 1.0,
+        }
+    }
+
+    /// Builder: the same joint with another weight.
+    pub fn with_weight(mut self, weight: f32) -> Self {
+        self.weight = weight;
+        self
+    }
+
+    /// Where `q` stands in the joint's range: -1 at `min`, +1 at `max` (eq. 18's `f_i`).
+    #[inline]
+    pub fn range_fraction(&self, q: f32) -> f32 {
+        (2.0 * q - (self.max + self.min)) / (self.max - self.min)
+    }
+
+    /// `q` clamped into `[min, max]`.
+    #[inline]
+    pub fn clamp(&self, q: f32) -> f32 {
+        q.max(self.min).min(self.max)
+    }
+}
+
+/// Which field of a joint an error is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum JointField {
+    /// `alpha`
+    Alpha,
+    /// `a`
+    A,
+    /// `theta`
+    Theta,
+    /// `d`
+    D,
+    /// `min` or `max`
+    Limits,
+    /// `max_rate`
+    MaxRate,
+    /// `weight`
+    Weight,
+}
+
+/// Why a robot description was rejected. `joint` is 0-based.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RobotError {
+    /// The chain has no joints.
+    Empty,
+    /// More joints than the capacity `N`.
+    TooManyJoints {
+        /// Joints offered.
+        count: usize,
+        /// Capacity.
+        capacity: usize,
+    },
+    /// A field is NaN or infinite.
+    NotFinite {
+        /// The joint.
+        joint: u8,
+        /// The field.
+        field: JointField,
+    },
+    /// `min >= max`.
+    InvertedLimits {
+        /// The joint.
+        joint: u8,
+    },
+    /// `max_rate <= 0`.
+    NonPositiveRate {
+        /// The joint.
+        joint: u8,
+    },
+    /// `weight` outside `(0, 1]`.
+    WeightOutOfRange {
+        /// The joint.
+        joint: u8,
+    },
+}
+
+impl core::fmt::Display for JointField {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            JointField::Alpha => "alpha",
+            JointField::A => "a",
+            JointField::Theta => "theta",
+            JointField::D => "d",
+            JointField::Limits => "limits",
+            JointField::MaxRate => "max_rate",
+            JointField::Weight => "weight",
+        })
+    }
+}
+
+impl core::fmt::Display for RobotError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            RobotError::Empty => write!(f, "the robot has no joints"),
+            RobotError::TooManyJoints { count, capacity } => {
+                write!(f, "{count} joints, more than the capacity of {capacity}")
+            }
+            RobotError::NotFinite { joint, field } => {
+                write!(
+                    f,
+                    "joint {}: {field} is not a finite number",
+                    joint as u32 + 1
+                )
+            }
+            RobotError::InvertedLimits { joint } => {
+                write!(
+                    f,
+                    "joint {}: lower limit is not below the upper limit",
+                    joint as u32 + 1
+                )
+            }
+            RobotError::NonPositiveRate { joint } => {
+                write!(f, "joint {}: rate limit must be positive", joint as u32 + 1)
+            }
+            RobotError::WeightOutOfRange { joint } => {
+                write!(f, "joint {}: weight must be in (0, 1]", joint as u32 + 1)
+            }
+        }
+    }
+}
+
+/// Per-joint constants derived once at validation, used by forward kinematics.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct LinkConstants {
+    pub(crate) cos_alpha: f32,
+    pub(crate) sin_alpha: f32,
+    /// `cos theta`, `sin theta` of a prismatic joint (unused for revolute).
+    pub(crate) cos_theta: f32,
+    pub(crate) sin_theta: f32,
+}
+
+/// A validated serial chain of at most `N` joints. Immutable once built.
+#[derive(Clone, Debug)]
+pub struct Robot<const N: usize> {
+    joints: heapless::Vec<Joint, N>,
+    links: [LinkConstants; N],
+}
+
+impl<const N: usize> Robot<N> {
+    /// Checks every joint and precomputes the link constants.
+    ///
+    /// Rejects: an empty chain, more than `N` joints (or more than 255), any
+    /// non-finite field, `min >= max`, `max_rate <= 0`, weight outside `(0, 1]`.
+    pub fn new(joints: &[Joint]) -> Result<Self, RobotError> {
+        if joints.is_empty() {
+            return Err(RobotError::Empty);
+        }
+        if joints.len() > N || joints.len() > u8::MAX as usize {
+            return Err(RobotError::TooManyJoints {
+                count: joints.len(),
+                capacity: N.min(u8::MAX as usize),
+            });
+        }
+        let mut out = heapless::Vec::new();
+        let mut links = [LinkConstants::default(); N];
+        for (i, (j, link)) in joints.iter().zip(links.iter_mut()).enumerate() {
+            let joint = i as u8;
+            let fields = [
+                (j.alpha, JointField::Alpha),
+                (j.a, JointField::A),
+                (j.theta, JointField::Theta),
+                (j.d, JointField::D),
+                (j.min, JointField::Limits),
+                (j.max, JointField::Limits),
+                (j.max_rate, JointField::MaxRate),
+                (j.weight, JointField::Weight),
+            ];
+            for (value, field) in fields {
+                if !value.is_finite() {
+                    return Err(RobotError::NotFinite { joint, field });
+                }
+            }
+            if j.min >= j.max {
+                return Err(RobotError::InvertedLimits { joint });
+            }
+            if j.max_rate <= 0.0 {
+                return Err(RobotError::NonPositiveRate { joint });
+            }
+            if !(j.weight > 0.0 && j.weight <= 1.0) {
+                return Err(RobotError::WeightOutOfRange { joint });
+            }
+            let (sin_alpha, cos_alpha) = libm::sincosf(j.alpha);
+            let (sin_theta, cos_theta) = libm::sincosf(j.theta);
+            *link = LinkConstants {
+                cos_alpha,
+                sin_alpha,
+                cos_theta,
+                sin_theta,
+            };
+            // Capacity was checked above, so the push cannot fail.
+            let _ = out.push(*j);
+        }
+        Ok(Robot { joints: out, links })
+    }
+
+    /// Number of joints `n`.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Always false: a validated robot has at least one joint.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.joints.is_empty()
+    }
+
+    /// The joints, in order from the base.
+    #[inline]
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    #[inline]
+    pub(crate) fn links(&self) -> &[LinkConstants] {
+        &self.links[..self.joints.len()]
+    }
+
+    /// The first joint whose value in `q` is outside its limits, or not finite.
+    pub fn first_outside_limits(&self, q: &[f32]) -> Option<usize> {
+        self.joints
+            .iter()
+            .zip(q)
+            .position(|(j, &v)| !(v >= j.min && v <= j.max))
+    }
+
+    /// Whether `q` has one finite value per joint, each within its limits.
+    pub fn accepts(&self, q: &[f32]) -> bool {
+        q.len() == self.len() && all_finite(q) && self.first_outside_limits(q).is_none()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok_joint() -> Joint {
+        Joint::revolute(0.5, 1.0, 0.0, -1.0, 1.0, 0.5)
+    }
+
+    #[test]
+    fn rejects_bad_chains_with_the_joint_and_reason() {
+        assert_eq!(Robot::<4>::new(&[]).unwrap_err(), RobotError::Empty);
+        assert_eq!(
+            Robot::<2>::new(&[ok_joint(); 3]).unwrap_err(),
+            RobotError::TooManyJoints {
+                count: 3,
+                capacity: 2
+            }
+        );
+        let mut j = ok_joint();
+        j.a = f32::NAN;
+        assert_eq!(
+            Robot::<4>::new(&[ok_joint(), j]).unwrap_err(),
+            RobotError::NotFinite {
+                joint: 1,
+                field: JointField::A
+            }
+        );
+        let mut j = ok_joint();
+        j.alpha = f32::INFINITY;
+        assert!(matches!(
+            Robot::<4>::new(&[j]).unwrap_err(),
+            RobotError::NotFinite {
+                joint: 0,
+                field: JointField::Alpha
+            }
+        ));
+        let mut j = ok_joint();
+        j.min = 2.0;
+        assert_eq!(
+            Robot::<4>::new(&[j]).unwrap_err(),
+            RobotError::InvertedLimits { joint: 0 }
+        );
+        let mut j = ok_joint();
+        j.max_rate = 0.0;
+        assert_eq!(
+            Robot::<4>::new(&[j]).unwrap_err(),
+            RobotError::NonPositiveRate { joint: 0 }
+        );
+        let j = ok_joint().with_weight(1.5);
+        assert_eq!(
+            Robot::<4>::new(&[j]).unwrap_err(),
+            RobotError::WeightOutOfRange { joint: 0 }
+        );
+        let j = ok_joint().with_weight(f32::NAN);
+        assert!(Robot::<4>::new(&[j]).is_err());
+    }
+
+    #[test]
+    fn range_fraction_is_minus_one_to_one() {
+        let j = Joint::prismatic(0.0, 0.0, 0.0, 2.0, 6.0, 1.0);
+        assert_eq!(j.range_fraction(2.0), -1.0);
+        assert_eq!(j.range_fraction(6.0), 1.0);
+        assert_eq!(j.range_fraction(4.0), 0.0);
+    }
+
+    #[test]
+    fn limits_check_catches_nan_and_out_of_range() {
+        let r = Robot::<4>::new(&[ok_joint(), ok_joint()]).unwrap();
+        assert!(r.accepts(&[0.0, 0.5]));
+        assert!(!r.accepts(&[0.0, 1.5]));
+        assert!(!r.accepts(&[f32::NAN, 0.0]));
+        assert!(!r.accepts(&[0.0]));
+        assert_eq!(r.first_outside_limits(&[0.0, -3.0]), Some(1));
+    }
+}

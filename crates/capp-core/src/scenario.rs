@@ -1,0 +1,150 @@
+//! Robot, obstacles and mission, validated together into the immutable model
+//! every step reads. Capacities: `N` joints, `M` obstacles, `W` waypoints.
+
+use crate::control::Target;
+use crate::math::{is_rotation, vec3, Mat3};
+use crate::mission::{Mission, MissionError, Settings, Waypoint};
+use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
+use crate::robot::{Robot, RobotError};
+
+/// Tolerance on `R^T R - I` and `det R - 1` for a target orientation.
+pub const ROTATION_TOLERANCE: f32 = 1.0e-3;
+
+/// Why a scenario was rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ScenarioError {
+    /// The robot (checked by [`Robot::new`]).
+    Robot(RobotError),
+    /// An obstacle.
+    Obstacle(ObstacleError),
+    /// The waypoints or settings.
+    Mission(MissionError),
+}
+
+impl From<RobotError> for ScenarioError {
+    fn from(e: RobotError) -> Self {
+        ScenarioError::Robot(e)
+    }
+}
+impl From<ObstacleError> for ScenarioError {
+    fn from(e: ObstacleError) -> Self {
+        ScenarioError::Obstacle(e)
+    }
+}
+impl From<MissionError> for ScenarioError {
+    fn from(e: MissionError) -> Self {
+        ScenarioError::Mission(e)
+    }
+}
+
+impl core::fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ScenarioError::Robot(e) => write!(f, "robot: {e}"),
+            ScenarioError::Obstacle(e) => write!(f, "{e}"),
+            ScenarioError::Mission(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// Everything a plan depends on, checked once. Immutable.
+#[derive(Clone, Debug)]
+pub struct Scenario<const N: usize, const M: usize, const W: usize> {
+    robot: Robot<N>,
+    obstacles: heapless::Vec<Obstacle, M>,
+    waypoints: heapless::Vec<Waypoint, W>,
+    targets: heapless::Vec<Target, W>,
+    settings: Settings,
+}
+
+impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
+    /// Validates the obstacles and the mission against the robot.
+    pub fn new(
+        robot: Robot<N>,
+        obstacles: &[SuperEllipsoid],
+        mission: &Mission<W>,
+    ) -> Result<Self, ScenarioError> {
+        let settings = mission.settings;
+        settings.validate()?;
+        if obstacles.len() > M || obstacles.len() > u8::MAX as usize + 1 {
+            return Err(ObstacleError::TooMany {
+                capacity: M.min(256),
+            }
+            .into());
+        }
+        let mut validated = heapless::Vec::new();
+        for (i, s) in obstacles.iter().enumerate() {
+            let o = Obstacle::new(
+                i as u8,
+                s,
+                settings.avoidance.margins(),
+                settings.avoidance.influence_distance,
+            )?;
+            let _ = validated.push(o);
+        }
+        if mission.waypoints.is_empty() {
+            return Err(MissionError::NoWaypoints.into());
+        }
+        let mut targets = heapless::Vec::new();
+        for (i, w) in mission.waypoints.iter().enumerate() {
+            let waypoint = i as u8;
+            if !w
+                .position
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= MAX_EXTENT)
+            {
+                return Err(MissionError::BadPosition { waypoint }.into());
+            }
+            let orientation = match &w.orientation {
+                None => None,
+                Some(rows) => {
+                    let r = Mat3::from_row_slice(&[
+                        rows[0][0], rows[0][1], rows[0][2], rows[1][0], rows[1][1], rows[1][2],
+                        rows[2][0], rows[2][1], rows[2][2],
+                    ]);
+                    if !is_rotation(&r, ROTATION_TOLERANCE) {
+                        return Err(MissionError::NotARotation { waypoint }.into());
+                    }
+                    Some(r)
+                }
+            };
+            let _ = targets.push(Target {
+                position: vec3(w.position),
+                orientation,
+            });
+        }
+        Ok(Scenario {
+            robot,
+            obstacles: validated,
+            waypoints: mission.waypoints.clone(),
+            targets,
+            settings,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot<N> {
+        &self.robot
+    }
+
+    /// The validated obstacles.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// The waypoints as given.
+    pub fn waypoints(&self) -> &[Waypoint] {
+        &self.waypoints
+    }
+
+    /// The targets the planner drives to, one per waypoint.
+    pub fn targets(&self) -> &[Target] {
+        &self.targets
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+}
