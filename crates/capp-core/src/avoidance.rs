@@ -39,16 +39,21 @@ pub struct AvoidanceSettings {
     /// Obstacles farther than this outside a point's inflated obstacle do not
     /// constrain it, length units. The paper uses every obstacle (infinite).
     pub influence_distance: f32,
+    /// `C - 1` of the closest pair below which the approaching motion is
+    /// removed in full (see [`crate::projection`]); 0 gives the paper's rule.
+    pub engage_clearance: f32,
 }
 
 impl AvoidanceSettings {
-    /// The listing's margins (6.0, 3.0), mid-points only, 24 length units of influence.
+    /// The listing's margins (6.0, 3.0), mid-points only, 24 length units of
+    /// influence, the projection engaged below `C - 1 = 1`.
     pub const fn listing() -> Self {
         AvoidanceSettings {
             joint_margin: 6.0,
             link_margin: 3.0,
             points_per_link: 1,
             influence_distance: 24.0,
+            engage_clearance: 1.0,
         }
     }
 

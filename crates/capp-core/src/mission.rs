@@ -112,6 +112,8 @@ pub enum SettingsField {
     PointsPerLink,
     /// `avoidance.influence_distance`
     InfluenceDistance,
+    /// `avoidance.engage_clearance`
+    EngageClearance,
     /// `max_steps`
     MaxSteps,
     /// `stall_window`
@@ -140,6 +142,9 @@ impl core::fmt::Display for SettingsField {
             SettingsField::PointsPerLink => "points_per_link must be 1 to 8",
             SettingsField::InfluenceDistance => {
                 "influence_distance must be non-negative and at most 1e4"
+            }
+            SettingsField::EngageClearance => {
+                "engage_clearance must be non-negative and at most 1e6"
             }
             SettingsField::MaxSteps => "max_steps must be at least 1",
             SettingsField::StallWindow => "stall_window must be at least 1",
@@ -234,6 +239,11 @@ impl Settings {
                 non_negative(self.avoidance.influence_distance)
                     && self.avoidance.influence_distance <= 1e4,
                 F::InfluenceDistance,
+            ),
+            (
+                non_negative(self.avoidance.engage_clearance)
+                    && self.avoidance.engage_clearance <= 1e6,
+                F::EngageClearance,
             ),
             (self.max_steps >= 1, F::MaxSteps),
             (self.stall_window >= 1, F::StallWindow),

@@ -152,9 +152,9 @@ mod tests {
 
     #[test]
     fn pips_validates_and_home_is_within_limits() {
-        let robot = robot::<18>().unwrap();
-        assert_eq!(robot.len(), 18);
-        assert!(robot.accepts(&home()));
+        let pips = robot::<18>().unwrap();
+        assert_eq!(pips.len(), 18);
+        assert!(pips.accepts(&home()));
         assert_eq!(
             robot::<17>().unwrap_err(),
             RobotError::TooManyJoints {

@@ -32,7 +32,7 @@ use crate::control::{
 };
 use crate::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use crate::math::{all_finite, dot_slice};
-use crate::projection::{limit_rates, project};
+use crate::projection::{limit_rates, project, strength};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
 
@@ -407,10 +407,15 @@ impl<const N: usize> Planner<N> {
             &mut self.rate,
             &mut self.gain,
         );
+        let engage = strength(
+            self.now.field.clearance.map(|c| c.value),
+            settings.avoidance.engage_clearance,
+        );
         let constrained = project(
             robot,
             &self.q[..n],
             &self.now.mu[..n],
+            engage,
             &mut self.rate[..n],
             &mut self.locked[..n],
         );

@@ -13,6 +13,13 @@
 //!
 //! * **one-sided**: only a rate that *approaches* the obstacles (`mu . qdot > 0`)
 //!   is projected; motion away from them is left alone.
+//! * **engaged near contact**: the paper's rule (`dP/dt <= 0` always) forbids
+//!   ever getting closer to anything, so an arm cannot pass an obstacle it
+//!   must go near. Here the approaching component is removed in full only once
+//!   the closest pair's `C - 1` is below `engage_clearance`, not at all above
+//!   twice that, and in proportion between: the arm slows its approach and
+//!   then slides along the obstacle. Entry is still impossible: the planner
+//!   never accepts a step that puts a point inside an inflated obstacle.
 //! * **locked joints**: a joint held at a limit cannot take the correction, so
 //!   the projection is done in the subspace of the free joints (`mu_i = 0` for
 //!   locked ones), which keeps `mu . qdot = 0` exact after the integrator clamps.
@@ -28,16 +35,32 @@ fn blocked(min: f32, max: f32, q: f32, rate: f32) -> bool {
     (q <= min && rate < 0.0) || (q >= max && rate > 0.0)
 }
 
-/// Projects `rate` (n values) so that it does not approach the obstacles:
-/// afterwards `mu . rate <= 0` over the free joints. `locked` is scratch of `n`
-/// flags. Returns whether the projection changed the rate.
+/// How much of the approaching component to remove, from the closest pair's
+/// clearance `c = C - 1`: all of it at `c <= engage`, none at `c >= 2 engage`,
+/// linear between; all of it when `engage` is 0 (the paper's rule).
+pub fn strength(clearance: Option<f32>, engage: f32) -> f32 {
+    match clearance {
+        None => 0.0,
+        Some(c) if engage > 0.0 => ((2.0 * engage - c) / engage).clamp(0.0, 1.0),
+        Some(_) => 1.0,
+    }
+}
+
+/// Removes the fraction `strength` (in `[0, 1]`) of the component of `rate`
+/// (`n` values) that approaches the obstacles; with strength 1, afterwards
+/// `mu . rate <= 0`. `locked` is scratch of `n` flags. Returns whether the
+/// rate was constrained.
 pub fn project<const N: usize>(
     robot: &Robot<N>,
     q: &[f32],
     mu: &[f32],
+    strength: f32,
     rate: &mut [f32],
     locked: &mut [bool],
 ) -> bool {
+    if strength.is_nan() || strength <= 0.0 {
+        return false;
+    }
     let n = robot.len();
     let joints = robot.joints();
     let (q, mu, rate, locked) = (&q[..n], &mu[..n], &mut rate[..n], &mut locked[..n]);
@@ -62,7 +85,7 @@ pub fn project<const N: usize>(
         if !(approach > 0.0 && size_sq > 0.0 && approach.is_finite() && size_sq.is_finite()) {
             return pass > 0;
         }
-        let k = approach / size_sq;
+        let k = strength.min(1.0) * approach / size_sq;
         let mut newly_locked = false;
         for (j, joint) in joints.iter().enumerate() {
             if !locked[j] && blocked(joint.min, joint.max, q[j], rate[j] - k * mu[j]) {

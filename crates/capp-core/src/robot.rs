@@ -157,7 +157,20 @@ pub enum RobotError {
         /// The joint.
         joint: u8,
     },
+    /// `|a|`, `|d|` or a prismatic limit beyond [`MAX_LENGTH`], or a revolute
+    /// limit beyond [`MAX_ANGLE`]: sizes that would overflow `f32` products.
+    OutOfRange {
+        /// The joint.
+        joint: u8,
+        /// The field.
+        field: JointField,
+    },
 }
+
+/// Largest accepted link length, offset or prismatic travel, length units.
+pub const MAX_LENGTH: f32 = 1.0e4;
+/// Largest accepted revolute limit magnitude, radians (a few hundred turns).
+pub const MAX_ANGLE: f32 = 1.0e3;
 
 impl core::fmt::Display for JointField {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -199,6 +212,13 @@ impl core::fmt::Display for RobotError {
             }
             RobotError::WeightOutOfRange { joint } => {
                 write!(f, "joint {}: weight must be in (0, 1]", joint as u32 + 1)
+            }
+            RobotError::OutOfRange { joint, field } => {
+                write!(
+                    f,
+                    "joint {}: {field} is implausibly large",
+                    joint as u32 + 1
+                )
             }
         }
     }
@@ -257,6 +277,19 @@ impl<const N: usize> Robot<N> {
             }
             if j.min >= j.max {
                 return Err(RobotError::InvertedLimits { joint });
+            }
+            let limit_bound = match j.kind {
+                JointKind::Revolute => MAX_ANGLE,
+                JointKind::Prismatic => MAX_LENGTH,
+            };
+            let sizes = [
+                (j.a, MAX_LENGTH, JointField::A),
+                (j.d, MAX_LENGTH, JointField::D),
+                (j.min, limit_bound, JointField::Limits),
+                (j.max, limit_bound, JointField::Limits),
+            ];
+            if let Some(&(_, _, field)) = sizes.iter().find(|(v, bound, _)| v.abs() > *bound) {
+                return Err(RobotError::OutOfRange { joint, field });
             }
             if j.max_rate <= 0.0 {
                 return Err(RobotError::NonPositiveRate { joint });
@@ -370,6 +403,15 @@ mod tests {
         );
         let j = ok_joint().with_weight(f32::NAN);
         assert!(Robot::<4>::new(&[j]).is_err());
+        let mut j = ok_joint();
+        j.a = 1.0e30;
+        assert_eq!(
+            Robot::<4>::new(&[j]).unwrap_err(),
+            RobotError::OutOfRange {
+                joint: 0,
+                field: JointField::A
+            }
+        );
     }
 
     #[test]

@@ -54,7 +54,7 @@ impl Decimator {
         let emit = !self.started
             || matches!(report.phase, Phase::Done(_))
             || match self.filter {
-                SetpointFilter::Every(k) => report.step % k.max(1) == 0,
+                SetpointFilter::Every(k) => report.step.is_multiple_of(k.max(1)),
                 SetpointFilter::ErrorChange {
                     position,
                     orientation,

@@ -1,0 +1,245 @@
+//! Test support: an f64 model of the arm written from the paper's equations,
+//! independent of the crate's f32 code, and a small seeded random source.
+#![allow(dead_code)]
+
+use capp_core::{Joint, JointKind, SuperEllipsoid};
+
+/// SplitMix64: tiny, seeded, reproducible.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+pub type V3 = [f64; 3];
+pub type M3 = [[f64; 3]; 3];
+
+pub fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub fn scale(a: V3, k: f64) -> V3 {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+pub fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub fn mat_vec(m: &M3, v: V3) -> V3 {
+    [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
+}
+pub fn transpose(m: &M3) -> M3 {
+    let mut t = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            t[i][j] = m[j][i];
+        }
+    }
+    t
+}
+pub fn mat_mul(a: &M3, b: &M3) -> M3 {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+
+/// Every frame of a chain in f64: origins o_0..o_n and rotations R_0..R_n.
+pub struct Chain64 {
+    pub origins: Vec<V3>,
+    pub rotations: Vec<M3>,
+}
+
+/// Eq. 5-6 in f64, 4x4 homogeneous products as the paper writes them.
+pub fn fk64(joints: &[Joint], q: &[f64]) -> Chain64 {
+    let mut t = [[0.0f64; 4]; 4];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let mut origins = vec![[0.0; 3]];
+    let mut rotations = vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]];
+    for (j, &v) in joints.iter().zip(q) {
+        let (theta, d) = match j.kind {
+            JointKind::Revolute => (v, j.d as f64),
+            JointKind::Prismatic => (j.theta as f64, v),
+        };
+        let (alpha, a) = (j.alpha as f64, j.a as f64);
+        let (ca, sa, ct, st) = (alpha.cos(), alpha.sin(), theta.cos(), theta.sin());
+        let m = [
+            [ct, -st * ca, st * sa, a * ct],
+            [st, ct * ca, -ct * sa, a * st],
+            [0.0, sa, ca, d],
+            [0.0, 0.0, 0.0, 1.0],
+        ];
+        let mut next = [[0.0f64; 4]; 4];
+        for r in 0..4 {
+            for c in 0..4 {
+                next[r][c] = (0..4).map(|k| t[r][k] * m[k][c]).sum();
+            }
+        }
+        t = next;
+        origins.push([t[0][3], t[1][3], t[2][3]]);
+        rotations.push([
+            [t[0][0], t[0][1], t[0][2]],
+            [t[1][0], t[1][1], t[1][2]],
+            [t[2][0], t[2][1], t[2][2]],
+        ]);
+    }
+    Chain64 { origins, rotations }
+}
+
+/// R = Rz(rz) Ry(ry) Rx(rx), built from elementary rotations.
+pub fn euler123(rx: f64, ry: f64, rz: f64) -> M3 {
+    let rxm = [
+        [1.0, 0.0, 0.0],
+        [0.0, rx.cos(), -rx.sin()],
+        [0.0, rx.sin(), rx.cos()],
+    ];
+    let rym = [
+        [ry.cos(), 0.0, ry.sin()],
+        [0.0, 1.0, 0.0],
+        [-ry.sin(), 0.0, ry.cos()],
+    ];
+    let rzm = [
+        [rz.cos(), -rz.sin(), 0.0],
+        [rz.sin(), rz.cos(), 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    mat_mul(&rzm, &mat_mul(&rym, &rxm))
+}
+
+/// Eq. 25 in f64 for an obstacle inflated by `margin`: C(p) (1 on the surface).
+pub fn c64(s: &SuperEllipsoid, margin: f64, p: V3) -> f64 {
+    let r = euler123(
+        s.euler_123[0] as f64,
+        s.euler_123[1] as f64,
+        s.euler_123[2] as f64,
+    );
+    let centre = s.centre.map(|x| x as f64);
+    let x = mat_vec(&transpose(&r), sub(p, centre));
+    (0..3)
+        .map(|i| (x[i].abs() / (s.semi_axes[i] as f64 + margin)).powf(s.exponents[i] as f64))
+        .sum()
+}
+
+/// Avoidance points as the paper places them: per link, `interior` evenly
+/// spaced points (link margin) and the far joint origin (joint margin).
+pub fn points64(chain: &Chain64, interior: usize) -> Vec<(V3, bool)> {
+    let mut out = Vec::new();
+    for link in 1..chain.origins.len() {
+        let (a, b) = (chain.origins[link - 1], chain.origins[link]);
+        for i in 1..=interior {
+            let t = i as f64 / (interior + 1) as f64;
+            out.push((add(a, scale(sub(b, a), t)), false));
+        }
+        out.push((b, true));
+    }
+    out
+}
+
+/// Eq. 26 in f64 over every pair (no influence cut-off).
+pub fn potential64(
+    joints: &[Joint],
+    q: &[f64],
+    obstacles: &[SuperEllipsoid],
+    margins: (f64, f64),
+    interior: usize,
+) -> f64 {
+    let chain = fk64(joints, q);
+    let mut p = 0.0;
+    for (point, is_joint) in points64(&chain, interior) {
+        let margin = if is_joint { margins.0 } else { margins.1 };
+        for s in obstacles {
+            p += 1.0 / (c64(s, margin, point) - 1.0);
+        }
+    }
+    p
+}
+
+/// Smallest C - 1 over every pair, f64.
+pub fn min_clearance64(
+    joints: &[Joint],
+    q: &[f64],
+    obstacles: &[SuperEllipsoid],
+    margins: (f64, f64),
+    interior: usize,
+) -> f64 {
+    let chain = fk64(joints, q);
+    let mut m = f64::INFINITY;
+    for (point, is_joint) in points64(&chain, interior) {
+        let margin = if is_joint { margins.0 } else { margins.1 };
+        for s in obstacles {
+            m = m.min(c64(s, margin, point) - 1.0);
+        }
+    }
+    m
+}
+
+/// A random chain of `n` joints, both kinds, lengths of a few units.
+pub fn random_chain(rng: &mut Rng, n: usize) -> Vec<Joint> {
+    (0..n)
+        .map(|_| {
+            let alpha = rng.uniform(-3.0, 3.0) as f32;
+            let a = rng.uniform(-3.0, 6.0) as f32;
+            if rng.below(4) == 0 {
+                let lo = rng.uniform(-3.0, 1.0) as f32;
+                Joint::prismatic(
+                    alpha,
+                    a,
+                    rng.uniform(-3.0, 3.0) as f32,
+                    lo,
+                    lo + rng.uniform(1.0, 6.0) as f32,
+                    1.0,
+                )
+            } else {
+                let lo = rng.uniform(-3.0, -0.5) as f32;
+                Joint::revolute(
+                    alpha,
+                    a,
+                    rng.uniform(-2.0, 2.0) as f32,
+                    lo,
+                    lo + rng.uniform(1.0, 5.0) as f32,
+                    0.5,
+                )
+            }
+        })
+        .collect()
+}
+
+/// A random configuration strictly inside the limits.
+pub fn random_config(rng: &mut Rng, joints: &[Joint]) -> Vec<f32> {
+    joints
+        .iter()
+        .map(|j| {
+            let mid = 0.5 * (j.min + j.max) as f64;
+            let half = 0.5 * (j.max - j.min) as f64;
+            (mid + 0.9 * half * rng.uniform(-1.0, 1.0)) as f32
+        })
+        .collect()
+}
+
+/// End-effector pose of `q` as a waypoint (position, rotation rows), f64 FK rounded to f32.
+pub fn pose_of(joints: &[Joint], q: &[f32]) -> ([f32; 3], [[f32; 3]; 3]) {
+    let q64: Vec<f64> = q.iter().map(|&x| x as f64).collect();
+    let chain = fk64(joints, &q64);
+    let p = *chain.origins.last().unwrap();
+    let r = *chain.rotations.last().unwrap();
+    (p.map(|x| x as f32), r.map(|row| row.map(|x| x as f32)))
+}

@@ -1,0 +1,525 @@
+//! End-to-end runs of the planner, checked against independent computations:
+//! targets reached, V monotone in free space, no avoidance point ever inside an
+//! inflated obstacle, limits and rate limits kept, dead ends detected, no
+//! chatter near the goal, and bad input refused.
+
+mod common;
+
+use capp_core::planner::StartError;
+use capp_core::*;
+use common::*;
+
+/// Room for PIPS (18 joints), 8 obstacles and 4 waypoints; smaller robots fit too.
+type Pips = Scenario<18, 8, 4>;
+
+fn scenario(
+    joints: &[Joint],
+    obstacles: &[SuperEllipsoid],
+    waypoints: &[Waypoint],
+    settings: Settings,
+) -> Pips {
+    let robot = Robot::new(joints).unwrap();
+    Scenario::new(
+        robot,
+        obstacles,
+        &Mission::new(waypoints, settings).unwrap(),
+    )
+    .unwrap()
+}
+
+/// Everything a run did, with the invariants checked at every step.
+struct Run {
+    outcome: Outcome,
+    steps: u32,
+    v: Vec<f32>,
+    /// Per step: joint rates and position error.
+    rates: Vec<(Vec<f32>, f32)>,
+}
+
+/// Runs to the end, checking after every step: limits, rate limits, finite
+/// values, and (independently, in f64) every avoidance point outside every
+/// inflated obstacle.
+fn run_checked(sc: &Pips, start: &[f32]) -> Run {
+    let joints = sc.robot().joints().to_vec();
+    let s = sc.settings();
+    let margins = (
+        s.avoidance.joint_margin as f64,
+        s.avoidance.link_margin as f64,
+    );
+    let interior = s.avoidance.points_per_link as usize;
+    let obstacles: Vec<SuperEllipsoid> = sc.obstacles().iter().map(|o| *o.source()).collect();
+    let mut planner = Planner::new(sc, start).unwrap();
+    let mut previous = planner.joints().to_vec();
+    let mut run = Run {
+        outcome: Outcome::Capped,
+        steps: 0,
+        v: vec![planner.last_report().v],
+        rates: vec![],
+    };
+    let outcome = planner
+        .run(sc, |p, r| {
+            let q = p.joints();
+            for (j, joint) in joints.iter().enumerate() {
+                assert!(q[j].is_finite(), "step {}: joint {j} not finite", r.step);
+                assert!(
+                    q[j] >= joint.min && q[j] <= joint.max,
+                    "step {}: joint {j} = {} outside [{}, {}]",
+                    r.step,
+                    q[j],
+                    joint.min,
+                    joint.max
+                );
+                let moved = (q[j] - previous[j]).abs();
+                let allowed = r.time_step_s * joint.max_rate * (1.0 + 1e-5) + 1e-6;
+                assert!(
+                    moved <= allowed,
+                    "step {}: joint {j} moved {moved} > {allowed}",
+                    r.step
+                );
+            }
+            assert!(
+                r.v.is_finite() && r.position_error.is_finite() && r.orientation_error.is_finite()
+            );
+            if !obstacles.is_empty() {
+                let q64: Vec<f64> = q.iter().map(|&x| x as f64).collect();
+                let c = min_clearance64(&joints, &q64, &obstacles, margins, interior);
+                assert!(
+                    c > 0.0,
+                    "step {}: an avoidance point is inside an inflated obstacle (C - 1 = {c})",
+                    r.step
+                );
+            }
+            previous.copy_from_slice(q);
+            run.v.push(r.v);
+            run.rates.push((p.rates().to_vec(), r.position_error));
+        })
+        .unwrap();
+    run.outcome = outcome;
+    run.steps = planner.last_report().step;
+    run
+}
+
+fn pips_target(rng: &mut Rng) -> ([f32; 3], [[f32; 3]; 3]) {
+    let joints = pips::joints();
+    let q: Vec<f32> = joints
+        .iter()
+        .map(|j| {
+            let (mid, half) = (0.5 * (j.min + j.max), 0.5 * (j.max - j.min));
+            mid + 0.6 * half * rng.uniform(-1.0, 1.0) as f32
+        })
+        .collect();
+    pose_of(&joints, &q)
+}
+
+#[test]
+fn free_space_reaches_reachable_poses_and_v_never_increases() {
+    let mut rng = Rng(2024);
+    for trial in 0..6 {
+        let (p, r) = pips_target(&mut rng);
+        let sc = scenario(
+            &pips::joints(),
+            &[],
+            &[Waypoint::pose(p, r)],
+            Settings::default(),
+        );
+        let run = run_checked(&sc, &pips::home());
+        assert_eq!(run.outcome, Outcome::Reached, "trial {trial}");
+        for (k, w) in run.v.windows(2).enumerate() {
+            assert!(
+                w[1] <= w[0],
+                "trial {trial}: V rose at step {k}: {} -> {}",
+                w[0],
+                w[1]
+            );
+        }
+    }
+}
+
+#[test]
+fn no_chatter_near_the_goal() {
+    // Near the goal the rate shrinks with the error and the step stays below
+    // the stiffest mode's limit, so no joint rate flips sign step after step.
+    let mut rng = Rng(99);
+    for trial in 0..6 {
+        let (p, r) = pips_target(&mut rng);
+        let settings = Settings::default();
+        let sc = scenario(&pips::joints(), &[], &[Waypoint::pose(p, r)], settings);
+        let run = run_checked(&sc, &pips::home());
+        assert_eq!(run.outcome, Outcome::Reached);
+        let near: Vec<&Vec<f32>> = run
+            .rates
+            .iter()
+            .filter(|(_, e)| *e < settings.law.approach_radius)
+            .map(|(r, _)| r)
+            .collect();
+        assert!(
+            near.len() > 10,
+            "trial {trial}: the run should spend steps near the goal"
+        );
+        let mut flip_flops = 0;
+        for w in near.windows(3) {
+            // A rate under 0.1% of its limit is a joint at rest, not chatter.
+            let at_rest = 1e-3 * pips::REVOLUTE_RATE.min(pips::PRISMATIC_RATE);
+            flip_flops += (0..18)
+                .filter(|&j| {
+                    let (a, b, c) = (w[0][j], w[1][j], w[2][j]);
+                    a * b < 0.0 && b * c < 0.0 && b.abs() > at_rest
+                })
+                .count();
+        }
+        assert_eq!(
+            flip_flops, 0,
+            "trial {trial}: joint rates flip sign step after step near the goal"
+        );
+    }
+}
+
+#[test]
+fn obstacles_across_the_straight_path_are_avoided_and_targets_reached() {
+    let joints = pips::joints();
+    let start = pips::home();
+    let (home_p, _) = pose_of(&joints, &start);
+    let mut rng = Rng(7);
+    let mut reached = 0;
+    let mut constrained_runs = 0;
+    for _ in 0..6 {
+        let (p, _) = pips_target(&mut rng);
+        // A ball on the straight end-effector path, halfway.
+        let mid = [0, 1, 2].map(|i| 0.5 * (home_p[i] + p[i]));
+        let ball = SuperEllipsoid::aligned(mid, [4.0; 3], 2.0);
+        let sc = scenario(&joints, &[ball], &[Waypoint::at(p)], Settings::default());
+        if Planner::new(&sc, &start).is_err() {
+            continue;
+        }
+        let run = run_checked(&sc, &start);
+        assert_eq!(run.outcome, Outcome::Reached, "target {p:?} around {mid:?}");
+        reached += 1;
+        let mut planner = Planner::new(&sc, &start).unwrap();
+        let mut constrained = false;
+        planner
+            .run(&sc, |_, r| constrained |= r.constrained)
+            .unwrap();
+        constrained_runs += constrained as u32;
+    }
+    assert!(reached >= 5, "only {reached} scenarios were valid");
+    assert!(
+        constrained_runs >= 3,
+        "the obstacles should have constrained most runs"
+    );
+}
+
+/// Three revolute links of 10 in the x-y plane sweep the hand from
+/// (24.2, 13.2) to (24.2, -13.2); a tall box stands across that straight path.
+fn planar_box_scenario(waypoints: &[Waypoint]) -> (Pips, [f32; 3]) {
+    let link = Joint::revolute(0.0, 10.0, 0.0, -2.8, 2.8, 0.5);
+    let joints = [link; 3];
+    let mut settings = Settings::default();
+    settings.avoidance.joint_margin = 1.0;
+    settings.avoidance.link_margin = 0.5;
+    settings.avoidance.points_per_link = 3;
+    settings.avoidance.influence_distance = 5.0;
+    let the_box = SuperEllipsoid::aligned([25.0, 0.0, 0.0], [1.5, 1.5, 20.0], 8.0);
+    (
+        scenario(&joints, &[the_box], waypoints, settings),
+        [0.0, 0.5, 0.5],
+    )
+}
+
+#[test]
+fn a_planar_arm_stalls_at_a_box_and_passes_it_with_a_waypoint() {
+    // Straight at it, the arm presses on the box top: a dead end, detected.
+    let target = Waypoint::at([24.2, -13.2, 0.0]);
+    let (sc, start) = planar_box_scenario(&[target]);
+    let run = run_checked(&sc, &start);
+    assert_eq!(run.outcome, Outcome::Stalled);
+    // The operator's remedy (paper, section 5): a waypoint inside the box.
+    let (sc, start) = planar_box_scenario(&[Waypoint::at([19.0, 0.0, 0.0]), target]);
+    let run = run_checked(&sc, &start);
+    assert_eq!(run.outcome, Outcome::Reached);
+}
+
+#[test]
+fn unreachable_target_ends_stalled_within_the_cap() {
+    let sc = scenario(
+        &pips::joints(),
+        &[],
+        &[Waypoint::at([400.0, 0.0, 50.0])],
+        Settings::default(),
+    );
+    let run = run_checked(&sc, &pips::home());
+    assert_eq!(run.outcome, Outcome::Stalled);
+    assert!(run.steps < Settings::default().max_steps);
+}
+
+#[test]
+fn target_inside_an_obstacle_ends_stalled_and_never_enters() {
+    let joints = pips::joints();
+    let mut rng = Rng(5);
+    let (p, _) = pips_target(&mut rng);
+    let ball = SuperEllipsoid::aligned(p, [3.0; 3], 2.0);
+    let sc = scenario(&joints, &[ball], &[Waypoint::at(p)], Settings::default());
+    let run = run_checked(&sc, &pips::home());
+    assert_eq!(run.outcome, Outcome::Stalled);
+    assert!(run.steps < Settings::default().max_steps);
+}
+
+#[test]
+fn waypoints_are_passed_in_order() {
+    let mut rng = Rng(31);
+    let (a, _) = pips_target(&mut rng);
+    let (b, r) = pips_target(&mut rng);
+    let sc = scenario(
+        &pips::joints(),
+        &[],
+        &[Waypoint::at(a), Waypoint::pose(b, r)],
+        Settings::default(),
+    );
+    let mut planner = Planner::new(&sc, &pips::home()).unwrap();
+    let mut seen = vec![];
+    let outcome = planner
+        .run(&sc, |_, r| {
+            if let Phase::Moving { waypoint } = r.phase {
+                if seen.last() != Some(&waypoint) {
+                    seen.push(waypoint);
+                }
+            }
+        })
+        .unwrap();
+    assert_eq!(outcome, Outcome::Reached);
+    assert_eq!(seen, vec![0, 1]);
+}
+
+#[test]
+fn a_finished_planner_stays_put() {
+    let joints = pips::joints();
+    let (p, r) = pose_of(&joints, &pips::home());
+    let sc = scenario(&joints, &[], &[Waypoint::pose(p, r)], Settings::default());
+    let mut planner = Planner::new(&sc, &pips::home()).unwrap();
+    let report = planner.step(&sc).unwrap();
+    assert_eq!(report.phase, Phase::Done(Outcome::Reached));
+    assert_eq!(planner.joints(), &pips::home());
+    assert_eq!(
+        planner.step(&sc).unwrap().phase,
+        Phase::Done(Outcome::Reached)
+    );
+}
+
+#[test]
+fn capped_when_the_iteration_cap_is_tiny() {
+    let mut rng = Rng(3);
+    let (p, r) = pips_target(&mut rng);
+    let settings = Settings {
+        max_steps: 5,
+        ..Settings::default()
+    };
+    let sc = scenario(&pips::joints(), &[], &[Waypoint::pose(p, r)], settings);
+    let run = run_checked(&sc, &pips::home());
+    assert_eq!(run.outcome, Outcome::Capped);
+    assert_eq!(run.steps, 5);
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let joints = pips::joints();
+    let robot = || Robot::<18>::new(&joints).unwrap();
+    let good_waypoint = Waypoint::at([50.0, 50.0, 10.0]);
+    let mission = |w: Waypoint, s: Settings| Mission::<4>::new(&[w], s).unwrap();
+
+    // Robot: NaN and inverted limits name the joint.
+    let mut bad = joints;
+    bad[4].a = f32::NAN;
+    assert!(matches!(
+        Robot::<18>::new(&bad),
+        Err(RobotError::NotFinite { joint: 4, .. })
+    ));
+    let mut bad = joints;
+    bad[7].min = bad[7].max;
+    assert_eq!(
+        Robot::<18>::new(&bad).unwrap_err(),
+        RobotError::InvertedLimits { joint: 7 }
+    );
+
+    // Obstacles: zero semi-axis, NaN, infinite exponent.
+    let zero = SuperEllipsoid::aligned([0.0; 3], [1.0, 0.0, 1.0], 2.0);
+    let err = Pips::new(
+        robot(),
+        &[zero],
+        &mission(good_waypoint, Settings::default()),
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        ScenarioError::Obstacle(ObstacleError::SemiAxisOutOfRange { obstacle: 0 })
+    );
+    let nan = SuperEllipsoid::aligned([f32::NAN, 0.0, 0.0], [1.0; 3], 2.0);
+    assert!(Pips::new(
+        robot(),
+        &[nan],
+        &mission(good_waypoint, Settings::default())
+    )
+    .is_err());
+    let inf = SuperEllipsoid::aligned([0.0; 3], [1.0; 3], f32::INFINITY);
+    assert!(Pips::new(
+        robot(),
+        &[inf],
+        &mission(good_waypoint, Settings::default())
+    )
+    .is_err());
+
+    // Waypoints: NaN position, a reflection instead of a rotation.
+    let err = Pips::new(
+        robot(),
+        &[],
+        &mission(Waypoint::at([f32::NAN, 0.0, 0.0]), Settings::default()),
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        ScenarioError::Mission(MissionError::BadPosition { waypoint: 0 })
+    );
+    let mirror = Waypoint::pose(
+        [1.0; 3],
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
+    );
+    assert!(matches!(
+        Pips::new(robot(), &[], &mission(mirror, Settings::default())),
+        Err(ScenarioError::Mission(MissionError::NotARotation { .. }))
+    ));
+    let err = Pips::new(
+        robot(),
+        &[],
+        &Mission {
+            waypoints: heapless::Vec::new(),
+            settings: Settings::default(),
+        },
+    )
+    .unwrap_err();
+    assert_eq!(err, ScenarioError::Mission(MissionError::NoWaypoints));
+
+    // Settings.
+    for broken in [
+        Settings {
+            time_step_s: f32::NAN,
+            ..Settings::default()
+        },
+        Settings {
+            time_step_s: -1.0,
+            ..Settings::default()
+        },
+        Settings {
+            stall_progress: 1.0,
+            ..Settings::default()
+        },
+        Settings {
+            max_steps: 0,
+            ..Settings::default()
+        },
+    ] {
+        assert!(matches!(
+            Pips::new(robot(), &[], &mission(good_waypoint, broken)),
+            Err(ScenarioError::Mission(MissionError::BadSetting(_)))
+        ));
+    }
+
+    // Start configurations.
+    let sc = Pips::new(robot(), &[], &mission(good_waypoint, Settings::default())).unwrap();
+    let mut q = pips::home();
+    q[3] = f32::INFINITY;
+    assert_eq!(
+        Planner::new(&sc, &q).unwrap_err(),
+        StartError::NotFinite { joint: 3 }
+    );
+    let mut q = pips::home();
+    q[2] = 100.0;
+    assert_eq!(
+        Planner::new(&sc, &q).unwrap_err(),
+        StartError::OutsideLimits { joint: 2 }
+    );
+    assert!(matches!(
+        Planner::new(&sc, &q[..5]).unwrap_err(),
+        StartError::WrongLength {
+            given: 5,
+            joints: 18
+        }
+    ));
+    let (p, _) = pose_of(&joints, &pips::home());
+    let around_hand = SuperEllipsoid::aligned(p, [2.0; 3], 2.0);
+    let sc = Pips::new(
+        robot(),
+        &[around_hand],
+        &mission(good_waypoint, Settings::default()),
+    )
+    .unwrap();
+    assert!(matches!(
+        Planner::new(&sc, &pips::home()).unwrap_err(),
+        StartError::InObstacle { obstacle: 0, .. }
+    ));
+}
+
+#[test]
+fn runs_are_deterministic_to_the_bit() {
+    let mut rng = Rng(77);
+    let (p, r) = pips_target(&mut rng);
+    let sc = scenario(
+        &pips::joints(),
+        &[],
+        &[Waypoint::pose(p, r)],
+        Settings::default(),
+    );
+    let trace = || {
+        let mut planner = Planner::new(&sc, &pips::home()).unwrap();
+        let mut bits = vec![];
+        planner
+            .run(&sc, |p, _| {
+                bits.extend(p.joints().iter().map(|x| x.to_bits()))
+            })
+            .unwrap();
+        bits
+    };
+    assert_eq!(trace(), trace());
+}
+
+#[test]
+fn the_listing_decimation_emits_start_changes_and_end() {
+    let mut rng = Rng(8);
+    let (p, r) = pips_target(&mut rng);
+    let sc = scenario(
+        &pips::joints(),
+        &[],
+        &[Waypoint::pose(p, r)],
+        Settings::default(),
+    );
+    let mut planner = Planner::new(&sc, &pips::home()).unwrap();
+    let mut decimator = setpoint::Decimator::new(SetpointFilter::LISTING);
+    assert!(
+        decimator.offer(planner.last_report()),
+        "the start is always a setpoint"
+    );
+    let mut emitted = vec![*planner.last_report()];
+    let mut total = 0;
+    planner
+        .run(&sc, |_, r| {
+            total += 1;
+            if decimator.offer(r) {
+                emitted.push(*r);
+            }
+        })
+        .unwrap();
+    assert!(
+        emitted.len() > 2 && emitted.len() < total / 2,
+        "{} of {total}",
+        emitted.len()
+    );
+    assert!(
+        matches!(emitted.last().unwrap().phase, Phase::Done(_)),
+        "the end is always a setpoint"
+    );
+    for w in emitted.windows(2).take(emitted.len().saturating_sub(2)) {
+        let moved = (w[1].position_error - w[0].position_error).abs() > 1.0
+            || (w[1].orientation_error - w[0].orientation_error).abs() > 0.1;
+        assert!(
+            moved,
+            "a setpoint was emitted without the errors changing enough"
+        );
+    }
+}

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Every check the project has, in one place: README, CI and people run this.
+# Installs what it needs on a fresh machine (the thumb targets).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== %s\n' "$*"; }
+
+step "toolchain targets"
+rustup target add thumbv7em-none-eabihf thumbv6m-none-eabi
+
+step "format"
+cargo fmt --all --check
+
+step "lints"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "host tests"
+cargo test --workspace
+
+step "capp-core builds for Cortex-M4F and Cortex-M0+ (no_std, with and without defmt)"
+cargo build -p capp-core --target thumbv7em-none-eabihf
+cargo build -p capp-core --target thumbv6m-none-eabi --features defmt
