@@ -208,6 +208,8 @@ pub struct Planner<const N: usize> {
     drive: [f32; N],
     rate: [f32; N],
     gain: [f32; N],
+    /// Weighted squared Jacobian column sizes (for the step bound).
+    columns: [f32; N],
     locked: [bool; N],
     step: u32,
     phase: Phase,
@@ -251,6 +253,7 @@ impl<const N: usize> Planner<N> {
             drive: [0.0; N],
             rate: [0.0; N],
             gain: [0.0; N],
+            columns: [0.0; N],
             locked: [false; N],
             step: 0,
             phase: Phase::Moving { waypoint: 0 },
@@ -458,9 +461,9 @@ impl<const N: usize> Planner<N> {
             robot,
             &self.now.frames,
             settings.law.orientation_scale,
-            &mut self.drive[..n],
+            &mut self.columns[..n],
         );
-        let stiffness = dot_slice(&self.gain[..n], &self.drive[..n]);
+        let stiffness = dot_slice(&self.gain[..n], &self.columns[..n]);
         if stiffness > 0.0 {
             h = h.min(1.0 / stiffness);
         }
