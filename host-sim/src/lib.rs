@@ -1,0 +1,34 @@
+//! # capp-sim: the host-side CAPP simulator
+//!
+//! Loads a planning problem (a TOML scenario, or the listing's own `input.dat`),
+//! runs `capp-core` on it, writes the results (trajectory CSV, the decimated
+//! setpoint stream, `joints.dat`, a summary), checks a trajectory independently
+//! of the planner, and draws pictures of it. The `capp` binary is a thin
+//! command-line front end over these modules; a `capp serial` front end can
+//! reuse [`problem`], [`scenario_file`], [`legacy`] and [`output`] unchanged.
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`problem`] | the loaded problem (core types + start + settings) and its validation, with file/line errors |
+//! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
+//! | [`legacy`] | CAPP.c's `input.dat` reader and `joints.dat` writer |
+//! | [`plan`] | running the planner and recording every step |
+//! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
+//! | [`trajectory`] | reading a trajectory CSV back |
+//! | [`check`] | the independent f64 checker (own kinematics, own super-ellipsoids) |
+//! | [`render`] | SVG/PNG pictures and the HTML animation |
+//!
+//! Units: radians, the scenario's length unit, seconds, everywhere after loading.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod check;
+pub mod legacy;
+pub mod output;
+pub mod plan;
+pub mod problem;
+pub mod render;
+pub mod scenario_file;
+pub mod trajectory;
+
+pub use problem::{LoadError, Problem};

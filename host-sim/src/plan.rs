@@ -1,0 +1,119 @@
+//! Running the planner on a [`Problem`] and recording every step.
+//!
+//! Row 0 is the start configuration; row `k` the configuration after step `k`.
+//! The setpoint decimation is the core's own ([`capp_core::setpoint::Decimator`]),
+//! so the host and the firmware pick the same setpoints.
+
+use std::time::{Duration, Instant};
+
+use capp_core::avoidance::Clearance;
+use capp_core::setpoint::Decimator;
+use capp_core::{Outcome, Phase, StepReport};
+
+use crate::problem::{CorePlanner, CoreScenario, LoadError, Problem};
+
+/// One recorded configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// Step number (0 = start).
+    pub step: u32,
+    /// Integration step used to get here, seconds (0 at the start and for refused steps).
+    pub h: f32,
+    /// Joint values (radians or length units).
+    pub q: Vec<f32>,
+    /// End-effector position.
+    pub position: [f32; 3],
+    /// End-effector orientation, rows of the rotation matrix.
+    pub rotation: [[f32; 3]; 3],
+    /// `V` of eq. 12 for the active waypoint.
+    pub v: f32,
+    /// Position error, length units.
+    pub position_error: f32,
+    /// Orientation error (root sum square of the column errors).
+    pub orientation_error: f32,
+    /// Closest avoidance point / obstacle pair within influence.
+    pub clearance: Option<Clearance>,
+    /// Active waypoint, 0-based (the last one once the run is over).
+    pub waypoint: u8,
+    /// Whether the obstacle projection changed the rate.
+    pub constrained: bool,
+    /// Step halvings.
+    pub halvings: u8,
+    /// Whether this row is in the decimated setpoint stream.
+    pub setpoint: bool,
+}
+
+/// A finished plan.
+#[derive(Clone, Debug)]
+pub struct RunResult {
+    /// Every configuration, start first.
+    pub rows: Vec<Row>,
+    /// How the run ended.
+    pub outcome: Outcome,
+    /// Wall-clock time of the planning loop.
+    pub wall_time: Duration,
+}
+
+impl RunResult {
+    /// Steps taken.
+    pub fn steps(&self) -> u32 {
+        self.rows.last().map_or(0, |r| r.step)
+    }
+
+    /// The rows of the setpoint stream.
+    pub fn setpoints(&self) -> impl Iterator<Item = &Row> {
+        self.rows.iter().filter(|r| r.setpoint)
+    }
+}
+
+fn row(planner: &CorePlanner, report: &StepReport, waypoints: usize, setpoint: bool) -> Row {
+    let frames = planner.frames();
+    let p = frames.end_position();
+    let r = frames.end_rotation();
+    Row {
+        step: report.step,
+        h: report.time_step_s,
+        q: planner.joints().to_vec(),
+        position: [p.x, p.y, p.z],
+        rotation: [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
+        v: report.v,
+        position_error: report.position_error,
+        orientation_error: report.orientation_error,
+        clearance: report.clearance,
+        waypoint: match report.phase {
+            Phase::Moving { waypoint } => waypoint,
+            Phase::Done(_) => (waypoints - 1) as u8,
+        },
+        constrained: report.constrained,
+        halvings: report.halvings,
+        setpoint,
+    }
+}
+
+/// Plans `problem` (whose validated scenario is `scenario`), calling
+/// `progress` after every step.
+pub fn run(
+    problem: &Problem,
+    scenario: &CoreScenario,
+    mut progress: impl FnMut(&StepReport),
+) -> Result<RunResult, LoadError> {
+    let started = Instant::now();
+    let mut planner = CorePlanner::new(scenario, &problem.start)
+        .map_err(|e| LoadError::new(&problem.source, problem.lines.start, e.to_string()))?;
+    let mut decimator = Decimator::new(problem.setpoints);
+    let waypoints = problem.waypoints.len();
+    let first = *planner.last_report();
+    let mut rows = vec![row(&planner, &first, waypoints, decimator.offer(&first))];
+    let outcome = planner
+        .run(scenario, |planner, report| {
+            let setpoint = decimator.offer(report);
+            rows.push(row(planner, report, waypoints, setpoint));
+            progress(report);
+        })
+        .map_err(|e| LoadError::new(&problem.source, None, format!("planner: {e}")))?;
+    Ok(RunResult {
+        rows,
+        outcome,
+        wall_time: started.elapsed(),
+    })
+}

@@ -1,0 +1,313 @@
+//! The loaded planning problem: everything `capp-core` needs (joints,
+//! obstacles, waypoints, settings) plus the start configuration and where each
+//! item came from in its file, so that every rejection names the file and line.
+//!
+//! Both readers ([`crate::scenario_file`], [`crate::legacy`]) produce a
+//! [`Problem`]; [`Problem::validate`] then runs the core's own checks (robot,
+//! obstacles, mission, start) and turns their errors into [`LoadError`]s.
+//! Capacities: [`MAX_JOINTS`] joints, [`MAX_OBSTACLES`] obstacles,
+//! [`MAX_WAYPOINTS`] waypoints (the target included).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use capp_core::{
+    Joint, Mission, MissionError, Planner, Robot, Scenario, ScenarioError, SetpointFilter,
+    Settings, StartError, SuperEllipsoid, Waypoint,
+};
+
+/// Joint capacity of the simulator.
+pub const MAX_JOINTS: usize = 32;
+/// Obstacle capacity of the simulator.
+pub const MAX_OBSTACLES: usize = 64;
+/// Waypoint capacity (the target included).
+pub const MAX_WAYPOINTS: usize = 16;
+
+/// The core scenario at the simulator's capacities.
+pub type CoreScenario = Scenario<MAX_JOINTS, MAX_OBSTACLES, MAX_WAYPOINTS>;
+/// The core planner at the simulator's capacity.
+pub type CorePlanner = Planner<MAX_JOINTS>;
+
+/// A rejected input: the file, the line where the format has lines, the problem.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LoadError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line, when known.
+    pub line: Option<usize>,
+    /// What is wrong, in one sentence.
+    pub message: String,
+}
+
+impl LoadError {
+    /// An error at `line` (if any) of `file`.
+    pub fn new(file: &Path, line: Option<usize>, message: impl Into<String>) -> Self {
+        LoadError {
+            file: file.to_path_buf(),
+            line,
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(line) => write!(f, "{}:{line}: {}", self.file.display(), self.message),
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
+}
+
+impl std::error::Error for LoadError {}
+
+/// Which reader produced a problem.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceKind {
+    /// A TOML scenario file.
+    Toml,
+    /// CAPP.c's `input.dat`.
+    Legacy,
+}
+
+/// 1-based lines of the items of a problem in its file (`None` where unknown).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Lines {
+    /// The robot section.
+    pub robot: Option<usize>,
+    /// Per joint.
+    pub joints: Vec<Option<usize>>,
+    /// Per obstacle.
+    pub obstacles: Vec<Option<usize>>,
+    /// Per waypoint (the target last).
+    pub waypoints: Vec<Option<usize>>,
+    /// Per waypoint, the line of its orientation when that is elsewhere.
+    pub orientations: Vec<Option<usize>>,
+    /// The settings section.
+    pub settings: Option<usize>,
+    /// The start configuration.
+    pub start: Option<usize>,
+}
+
+/// A planning problem in the core's units (radians, the file's length unit, seconds).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Problem {
+    /// Short name (the file stem unless the file names it).
+    pub name: String,
+    /// One paragraph of description (may be empty).
+    pub description: String,
+    /// The file it was read from.
+    pub source: PathBuf,
+    /// Which reader.
+    pub kind: SourceKind,
+    /// Name of the length unit, for labels ("in", "m").
+    pub length_unit: String,
+    /// The joints.
+    pub joints: Vec<Joint>,
+    /// Joint names (for messages and plots).
+    pub joint_names: Vec<String>,
+    /// The obstacles.
+    pub obstacles: Vec<SuperEllipsoid>,
+    /// Obstacle names.
+    pub obstacle_names: Vec<String>,
+    /// Waypoints; the last is the target.
+    pub waypoints: Vec<Waypoint>,
+    /// Planner settings.
+    pub settings: Settings,
+    /// Start configuration.
+    pub start: Vec<f32>,
+    /// Which steps become setpoints.
+    pub setpoints: SetpointFilter,
+    /// Where each item is in the file.
+    pub lines: Lines,
+}
+
+impl Problem {
+    /// Reads `path`: a `.toml` file as a scenario, anything else as `input.dat`,
+    /// and validates the result ([`Problem::validate`]).
+    pub fn load(path: &Path) -> Result<Problem, LoadError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| LoadError::new(path, None, format!("cannot read the file: {e}")))?;
+        let problem = if is_toml(path) {
+            crate::scenario_file::parse(&text, path)?
+        } else {
+            crate::legacy::parse(&text, path)?
+        };
+        problem.validate()?;
+        Ok(problem)
+    }
+
+    fn error(&self, line: Option<usize>, message: impl Into<String>) -> LoadError {
+        LoadError::new(&self.source, line, message)
+    }
+
+    /// The validated core scenario.
+    pub fn scenario(&self) -> Result<CoreScenario, LoadError> {
+        let robot = Robot::<MAX_JOINTS>::new(&self.joints).map_err(|e| {
+            let line = robot_error_joint(&e)
+                .and_then(|j| self.lines.joints.get(j).copied().flatten())
+                .or(self.lines.robot);
+            self.error(line, format!("robot: {e}"))
+        })?;
+        let mission =
+            Mission::<MAX_WAYPOINTS>::new(&self.waypoints, self.settings).map_err(|e| {
+                self.error(
+                    self.lines.waypoints.last().copied().flatten(),
+                    e.to_string(),
+                )
+            })?;
+        Scenario::new(robot, &self.obstacles, &mission).map_err(|e| {
+            let line = match e {
+                ScenarioError::Robot(r) => {
+                    robot_error_joint(&r).and_then(|j| self.lines.joints.get(j).copied().flatten())
+                }
+                ScenarioError::Obstacle(o) => obstacle_error_index(&o)
+                    .and_then(|i| self.lines.obstacles.get(i).copied().flatten()),
+                ScenarioError::Mission(MissionError::BadSetting(_)) => self.lines.settings,
+                ScenarioError::Mission(MissionError::NotARotation { waypoint }) => self
+                    .lines
+                    .orientations
+                    .get(waypoint as usize)
+                    .copied()
+                    .flatten()
+                    .or(self
+                        .lines
+                        .waypoints
+                        .get(waypoint as usize)
+                        .copied()
+                        .flatten()),
+                ScenarioError::Mission(MissionError::BadPosition { waypoint }) => self
+                    .lines
+                    .waypoints
+                    .get(waypoint as usize)
+                    .copied()
+                    .flatten(),
+                ScenarioError::Mission(_) => None,
+            };
+            let mut message = e.to_string();
+            if let ScenarioError::Obstacle(o) = e {
+                if let Some(i) = obstacle_error_index(&o) {
+                    if let Some(name) = self.obstacle_names.get(i).filter(|n| !n.is_empty()) {
+                        message = format!("{message} (\"{name}\")");
+                    }
+                }
+            }
+            if let ScenarioError::Mission(MissionError::BadPosition { .. }) = e {
+                if self.kind == SourceKind::Toml && Some(self.waypoints.len() - 1) == last_index(&e)
+                {
+                    message =
+                        message.replace(&format!("waypoint {}", self.waypoints.len()), "target");
+                }
+            }
+            self.error(line, message)
+        })
+    }
+
+    /// Runs every check of the core (robot, obstacles, mission, start
+    /// configuration) and returns the scenario.
+    pub fn validate(&self) -> Result<CoreScenario, LoadError> {
+        let scenario = self.scenario()?;
+        CorePlanner::new(&scenario, &self.start).map_err(|e| {
+            let message = match e {
+                StartError::OutsideLimits { joint } => {
+                    let j = joint as usize;
+                    let joint = &self.joints[j];
+                    format!(
+                        "start configuration: {} = {} is outside its limits [{}, {}]",
+                        self.joint_label(j),
+                        self.start[j],
+                        joint.min,
+                        joint.max
+                    )
+                }
+                StartError::NotFinite { joint } => format!(
+                    "start configuration: {} is not a finite number",
+                    self.joint_label(joint as usize)
+                ),
+                StartError::InObstacle { point, obstacle } => format!(
+                    "start configuration puts the arm inside obstacle {}{} ({}; obstacles are inflated by the {} margin)",
+                    obstacle as usize + 1,
+                    self.obstacle_label(obstacle as usize),
+                    self.describe_point(point),
+                    if self.point_is_joint(point) { "joint" } else { "link" },
+                ),
+                other => format!("start configuration: {other}"),
+            };
+            self.error(self.lines.start, message)
+        })?;
+        Ok(scenario)
+    }
+
+    /// `joint 3 ("name")` for messages.
+    pub fn joint_label(&self, j: usize) -> String {
+        match self.joint_names.get(j).filter(|n| !n.is_empty()) {
+            Some(name) => format!("joint {} (\"{name}\")", j + 1),
+            None => format!("joint {}", j + 1),
+        }
+    }
+
+    /// ` "name"` for messages, or nothing.
+    pub fn obstacle_label(&self, i: usize) -> String {
+        match self.obstacle_names.get(i).filter(|n| !n.is_empty()) {
+            Some(name) => format!(" \"{name}\""),
+            None => String::new(),
+        }
+    }
+
+    fn point_is_joint(&self, id: u16) -> bool {
+        let per = self.settings.avoidance.points_per_link as usize + 1;
+        id as usize % per == per - 1
+    }
+
+    /// Where avoidance point `id` is on the arm, in words.
+    pub fn describe_point(&self, id: u16) -> String {
+        let per = self.settings.avoidance.points_per_link as usize + 1;
+        let link = id as usize / per;
+        let i = id as usize % per;
+        if i == per - 1 {
+            format!("point {id}, the far end of link {}", link + 1)
+        } else {
+            format!(
+                "point {id}, {}/{} of the way along link {}",
+                i + 1,
+                per,
+                link + 1
+            )
+        }
+    }
+}
+
+fn last_index(e: &ScenarioError) -> Option<usize> {
+    match e {
+        ScenarioError::Mission(MissionError::BadPosition { waypoint }) => Some(*waypoint as usize),
+        _ => None,
+    }
+}
+
+fn robot_error_joint(e: &capp_core::RobotError) -> Option<usize> {
+    use capp_core::RobotError as E;
+    match *e {
+        E::NotFinite { joint, .. }
+        | E::InvertedLimits { joint }
+        | E::NonPositiveRate { joint }
+        | E::WeightOutOfRange { joint } => Some(joint as usize),
+        _ => None,
+    }
+}
+
+fn obstacle_error_index(e: &capp_core::ObstacleError) -> Option<usize> {
+    use capp_core::ObstacleError as E;
+    match *e {
+        E::NotFinite { obstacle, .. }
+        | E::SemiAxisOutOfRange { obstacle }
+        | E::CentreOutOfRange { obstacle }
+        | E::ExponentOutOfRange { obstacle } => Some(obstacle as usize),
+        E::TooMany { .. } => None,
+    }
+}
+
+/// Whether `path` is read as a TOML scenario (by its extension).
+pub fn is_toml(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}

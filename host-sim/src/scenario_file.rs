@@ -1,0 +1,572 @@
+//! The TOML scenario format. Every field is documented in `docs/scenario.md`;
+//! this module is its reader.
+//!
+//! Units are explicit: `[units] angle = "degrees" | "radians"`, `length =
+//! "inches" | "metres"`. Every angle in the file (DH twists and angles, limits,
+//! revolute rates, start values, Euler angles) is in the angle unit; every
+//! length (DH lengths, prismatic limits and rates, positions, semi-axes, length
+//! settings) in the length unit. The loaded [`Problem`] is in radians and the
+//! file's length unit; the PIPS preset (inches) and the length-valued default
+//! settings (sized in inches) are converted to it.
+//!
+//! Unknown keys are errors (a misspelt setting must not be silently ignored).
+
+use std::path::Path;
+
+use capp_core::control::LawKind;
+use capp_core::math::rotation_123;
+use capp_core::{pips, Joint, JointKind, SetpointFilter, Settings, SuperEllipsoid, Waypoint};
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::problem::{LoadError, Problem, SourceKind};
+
+/// Length of one inch in metres.
+pub const INCH_M: f64 = 0.0254;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    name: Option<String>,
+    #[serde(default)]
+    description: String,
+    units: Units,
+    // Not `Spanned`: `[[robot.joints]]` defines the table implicitly, and an
+    // implicit table has no span.
+    robot: RobotSpec,
+    start: Option<Spanned<StartSpec>>,
+    #[serde(default)]
+    waypoints: Vec<Spanned<PoseSpec>>,
+    target: Spanned<PoseSpec>,
+    #[serde(default)]
+    obstacles: Vec<Spanned<ObstacleSpec>>,
+    settings: Option<Spanned<SettingsSpec>>,
+    output: Option<OutputSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Units {
+    angle: AngleUnit,
+    length: LengthUnit,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum AngleUnit {
+    Degrees,
+    Radians,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(rename_all = "lowercase")]
+enum LengthUnit {
+    Inches,
+    #[serde(alias = "meters")]
+    Metres,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotSpec {
+    preset: Option<String>,
+    joints: Option<Vec<Spanned<JointSpec>>>,
+    #[serde(default)]
+    overrides: Vec<Spanned<OverrideSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum JointType {
+    Revolute,
+    Prismatic,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointSpec {
+    #[serde(default)]
+    name: String,
+    #[serde(rename = "type")]
+    kind: JointType,
+    alpha: f64,
+    a: f64,
+    #[serde(default)]
+    theta: f64,
+    #[serde(default)]
+    d: f64,
+    min: f64,
+    max: f64,
+    max_rate: f64,
+    #[serde(default = "one")]
+    weight: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OverrideSpec {
+    joint: usize,
+    min: Option<f64>,
+    max: Option<f64>,
+    max_rate: Option<f64>,
+    weight: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum StartSpec {
+    Named(String),
+    Values(Vec<f64>),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PoseSpec {
+    position: [f64; 3],
+    euler: Option<[f64; 3]>,
+    matrix: Option<[[f64; 3]; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObstacleSpec {
+    #[serde(default)]
+    name: String,
+    centre: [f64; 3],
+    semi_axes: [f64; 3],
+    exponents: Option<[f64; 3]>,
+    exponent: Option<f64>,
+    #[serde(default)]
+    euler: [f64; 3],
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct SettingsSpec {
+    time_step_s: Option<f64>,
+    fine_radius: Option<f64>,
+    fine_step_fraction: Option<f64>,
+    position_tolerance: Option<f64>,
+    orientation_tolerance: Option<f64>,
+    law: Option<LawSpec>,
+    orientation_scale: Option<f64>,
+    approach_radius: Option<f64>,
+    joint_margin: Option<f64>,
+    link_margin: Option<f64>,
+    points_per_link: Option<u8>,
+    influence_distance: Option<f64>,
+    max_steps: Option<u32>,
+    stall_window: Option<u32>,
+    stall_progress: Option<f64>,
+    max_halvings: Option<u8>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum LawSpec {
+    Gradient,
+    Paper,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OutputSpec {
+    setpoints: Option<SetpointSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SetpointSpec {
+    Named(String),
+    Every(u32),
+}
+
+/// 1-based line of byte offset `at` in `text`.
+fn line_of(text: &str, at: usize) -> usize {
+    text.as_bytes()[..at.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// Parses a TOML scenario (not yet validated by the core: see [`Problem::validate`]).
+pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
+    let file: File = toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start));
+        LoadError::new(path, line, e.message().trim().to_string())
+    })?;
+    let err = |line: usize, msg: String| LoadError::new(path, Some(line), msg);
+    let at = |span: std::ops::Range<usize>| line_of(text, span.start);
+
+    let angle = match file.units.angle {
+        AngleUnit::Degrees => std::f64::consts::PI / 180.0,
+        AngleUnit::Radians => 1.0,
+    };
+    // File length units per inch: converts inch-sized presets and defaults.
+    let per_inch = match file.units.length {
+        LengthUnit::Inches => 1.0,
+        LengthUnit::Metres => INCH_M,
+    };
+    let length_unit = match file.units.length {
+        LengthUnit::Inches => "in",
+        LengthUnit::Metres => "m",
+    };
+
+    // Robot.
+    let robot_line = text
+        .lines()
+        .position(|l| l.trim_start().starts_with("[robot") || l.trim_start().starts_with("robot"))
+        .map_or(1, |i| i + 1);
+    let robot = file.robot;
+    let (mut joints, mut names, mut joint_lines, mut home) = match (&robot.preset, robot.joints) {
+        (Some(_), Some(_)) => {
+            return Err(err(
+                robot_line,
+                "robot: give either `preset` or `joints`, not both".into(),
+            ))
+        }
+        (None, None) => {
+            return Err(err(
+                robot_line,
+                "robot: missing `preset` or `joints` (a DH table)".into(),
+            ))
+        }
+        (Some(preset), None) => {
+            if !preset.eq_ignore_ascii_case("pips") {
+                return Err(err(
+                    robot_line,
+                    format!("robot: unknown preset \"{preset}\" (known: \"pips\")"),
+                ));
+            }
+            let scale = per_inch as f32;
+            let joints: Vec<Joint> = pips::joints()
+                .iter()
+                .map(|j| scale_lengths(*j, scale))
+                .collect();
+            let home: Vec<f32> = pips::home()
+                .iter()
+                .zip(&joints)
+                .map(|(&q, j)| match j.kind {
+                    JointKind::Revolute => q,
+                    JointKind::Prismatic => q * scale,
+                })
+                .collect();
+            let names = (1..=joints.len()).map(|i| format!("pips{i}")).collect();
+            let lines = vec![Some(robot_line); joints.len()];
+            (joints, names, lines, home)
+        }
+        (None, Some(specs)) => {
+            if specs.is_empty() {
+                return Err(err(robot_line, "robot: `joints` is empty".into()));
+            }
+            let mut joints = Vec::new();
+            let mut names = Vec::new();
+            let mut lines = Vec::new();
+            let mut home = Vec::new();
+            for spec in specs {
+                let line = at(spec.span());
+                let s = spec.into_inner();
+                let (joint, q0) = match s.kind {
+                    JointType::Revolute => (
+                        Joint {
+                            kind: JointKind::Revolute,
+                            alpha: (s.alpha * angle) as f32,
+                            a: s.a as f32,
+                            theta: 0.0,
+                            d: s.d as f32,
+                            min: (s.min * angle) as f32,
+                            max: (s.max * angle) as f32,
+                            max_rate: (s.max_rate * angle) as f32,
+                            weight: s.weight as f32,
+                        },
+                        (s.theta * angle) as f32,
+                    ),
+                    JointType::Prismatic => (
+                        Joint {
+                            kind: JointKind::Prismatic,
+                            alpha: (s.alpha * angle) as f32,
+                            a: s.a as f32,
+                            theta: (s.theta * angle) as f32,
+                            d: 0.0,
+                            min: s.min as f32,
+                            max: s.max as f32,
+                            max_rate: s.max_rate as f32,
+                            weight: s.weight as f32,
+                        },
+                        s.d as f32,
+                    ),
+                };
+                joints.push(joint);
+                names.push(s.name);
+                lines.push(Some(line));
+                home.push(q0);
+            }
+            (joints, names, lines, home)
+        }
+    };
+    for o in robot.overrides {
+        let line = at(o.span());
+        let o = o.into_inner();
+        if o.joint == 0 || o.joint > joints.len() {
+            return Err(err(
+                line,
+                format!(
+                    "robot override: joint {} does not exist (joints are numbered 1 to {})",
+                    o.joint,
+                    joints.len()
+                ),
+            ));
+        }
+        let j = &mut joints[o.joint - 1];
+        let unit = match j.kind {
+            JointKind::Revolute => angle,
+            JointKind::Prismatic => 1.0,
+        };
+        if let Some(v) = o.min {
+            j.min = (v * unit) as f32;
+        }
+        if let Some(v) = o.max {
+            j.max = (v * unit) as f32;
+        }
+        if let Some(v) = o.max_rate {
+            j.max_rate = (v * unit) as f32;
+        }
+        if let Some(v) = o.weight {
+            j.weight = v as f32;
+        }
+        joint_lines[o.joint - 1] = Some(line);
+    }
+    if names.iter().all(|n| n.is_empty()) {
+        names.clear();
+    }
+
+    // Start configuration.
+    let (start, start_line) = match file.start {
+        None => (std::mem::take(&mut home), None),
+        Some(spec) => {
+            let line = at(spec.span());
+            match spec.into_inner() {
+                StartSpec::Named(name) if name == "home" => (std::mem::take(&mut home), Some(line)),
+                StartSpec::Named(name) => {
+                    return Err(err(
+                        line,
+                        format!("start: unknown configuration \"{name}\" (give \"home\" or a list of joint values)"),
+                    ))
+                }
+                StartSpec::Values(values) => {
+                    if values.len() != joints.len() {
+                        return Err(err(
+                            line,
+                            format!(
+                                "start: {} values for {} joints",
+                                values.len(),
+                                joints.len()
+                            ),
+                        ));
+                    }
+                    let q = values
+                        .iter()
+                        .zip(&joints)
+                        .map(|(&v, j)| match j.kind {
+                            JointKind::Revolute => (v * angle) as f32,
+                            JointKind::Prismatic => v as f32,
+                        })
+                        .collect();
+                    (q, Some(line))
+                }
+            }
+        }
+    };
+
+    // Waypoints, then the target.
+    let mut waypoints = Vec::new();
+    let mut waypoint_lines = Vec::new();
+    let count = file.waypoints.len();
+    for (i, spec) in file.waypoints.into_iter().chain([file.target]).enumerate() {
+        let line = at(spec.span());
+        let what = if i == count {
+            "target".to_string()
+        } else {
+            format!("waypoint {}", i + 1)
+        };
+        let s = spec.into_inner();
+        let orientation = match (s.euler, s.matrix) {
+            (Some(_), Some(_)) => {
+                return Err(err(
+                    line,
+                    format!("{what}: give either `euler` or `matrix`, not both"),
+                ))
+            }
+            (Some(e), None) => {
+                if !e.iter().all(|x| x.is_finite()) {
+                    return Err(err(line, format!("{what}: `euler` is not finite")));
+                }
+                let r = rotation_123(
+                    (e[0] * angle) as f32,
+                    (e[1] * angle) as f32,
+                    (e[2] * angle) as f32,
+                );
+                Some([
+                    [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                    [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                    [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+                ])
+            }
+            (None, Some(m)) => Some(m.map(|row| row.map(|x| x as f32))),
+            (None, None) => None,
+        };
+        waypoints.push(Waypoint {
+            position: s.position.map(|x| x as f32),
+            orientation,
+        });
+        waypoint_lines.push(Some(line));
+    }
+
+    // Obstacles.
+    let mut obstacles = Vec::new();
+    let mut obstacle_names = Vec::new();
+    let mut obstacle_lines = Vec::new();
+    for spec in file.obstacles {
+        let line = at(spec.span());
+        let s = spec.into_inner();
+        let exponents = match (s.exponents, s.exponent) {
+            (Some(_), Some(_)) => {
+                return Err(err(
+                    line,
+                    "obstacle: give either `exponents` or `exponent`, not both".into(),
+                ))
+            }
+            (Some(k), None) => k,
+            (None, Some(k)) => [k; 3],
+            (None, None) => {
+                return Err(err(
+                    line,
+                    "obstacle: missing `exponents` (or `exponent` for all three axes)".into(),
+                ))
+            }
+        };
+        obstacles.push(SuperEllipsoid {
+            centre: s.centre.map(|x| x as f32),
+            semi_axes: s.semi_axes.map(|x| x as f32),
+            exponents: exponents.map(|x| x as f32),
+            euler_123: s.euler.map(|x| (x * angle) as f32),
+        });
+        obstacle_names.push(s.name);
+        obstacle_lines.push(Some(line));
+    }
+
+    // Settings: defaults sized in inches, converted to the file's unit.
+    let mut settings = default_settings(per_inch as f32);
+    let settings_line = file.settings.as_ref().map(|s| at(s.span()));
+    let s = file.settings.map(|s| s.into_inner()).unwrap_or_default();
+    let f = |v: Option<f64>, d: f32| v.map_or(d, |x| x as f32);
+    settings.time_step_s = f(s.time_step_s, settings.time_step_s);
+    settings.fine_radius = f(s.fine_radius, settings.fine_radius);
+    settings.fine_step_fraction = f(s.fine_step_fraction, settings.fine_step_fraction);
+    settings.position_tolerance = f(s.position_tolerance, settings.position_tolerance);
+    settings.orientation_tolerance = f(s.orientation_tolerance, settings.orientation_tolerance);
+    if let Some(law) = s.law {
+        settings.law.kind = match law {
+            LawSpec::Gradient => LawKind::Gradient,
+            LawSpec::Paper => LawKind::Paper,
+        };
+    }
+    settings.law.orientation_scale = f(s.orientation_scale, settings.law.orientation_scale);
+    settings.law.approach_radius = f(s.approach_radius, settings.law.approach_radius);
+    settings.avoidance.joint_margin = f(s.joint_margin, settings.avoidance.joint_margin);
+    settings.avoidance.link_margin = f(s.link_margin, settings.avoidance.link_margin);
+    settings.avoidance.influence_distance =
+        f(s.influence_distance, settings.avoidance.influence_distance);
+    if let Some(v) = s.points_per_link {
+        settings.avoidance.points_per_link = v;
+    }
+    if let Some(v) = s.max_steps {
+        settings.max_steps = v;
+    }
+    if let Some(v) = s.stall_window {
+        settings.stall_window = v;
+    }
+    settings.stall_progress = f(s.stall_progress, settings.stall_progress);
+    if let Some(v) = s.max_halvings {
+        settings.max_halvings = v;
+    }
+
+    let setpoints = match file.output.and_then(|o| o.setpoints) {
+        None => SetpointFilter::LISTING,
+        Some(SetpointSpec::Named(n)) if n == "listing" => SetpointFilter::LISTING,
+        Some(SetpointSpec::Named(n)) => {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!(
+                    "output.setpoints: unknown policy \"{n}\" (give \"listing\" or a step count)"
+                ),
+            ))
+        }
+        Some(SetpointSpec::Every(k)) => SetpointFilter::Every(k.max(1)),
+    };
+
+    let name = file.name.unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    Ok(Problem {
+        name,
+        description: file.description.trim().to_string(),
+        source: path.to_path_buf(),
+        kind: SourceKind::Toml,
+        length_unit: length_unit.into(),
+        joints,
+        joint_names: names,
+        obstacles,
+        obstacle_names,
+        waypoints,
+        settings,
+        start,
+        setpoints,
+        lines: crate::problem::Lines {
+            robot: Some(robot_line),
+            joints: joint_lines,
+            obstacles: obstacle_lines,
+            waypoints: waypoint_lines,
+            orientations: Vec::new(),
+            settings: settings_line,
+            start: start_line,
+        },
+    })
+}
+
+/// The core's defaults (sized for inches) with every length scaled by `per_inch`.
+pub fn default_settings(per_inch: f32) -> Settings {
+    let mut s = Settings::default();
+    if per_inch != 1.0 {
+        s.fine_radius *= per_inch;
+        s.position_tolerance *= per_inch;
+        s.law.orientation_scale *= per_inch;
+        s.law.approach_radius *= per_inch;
+        s.avoidance.joint_margin *= per_inch;
+        s.avoidance.link_margin *= per_inch;
+        s.avoidance.influence_distance *= per_inch;
+    }
+    s
+}
+
+fn scale_lengths(mut j: Joint, scale: f32) -> Joint {
+    if scale == 1.0 {
+        return j;
+    }
+    j.a *= scale;
+    j.d *= scale;
+    if j.kind == JointKind::Prismatic {
+        j.min *= scale;
+        j.max *= scale;
+        j.max_rate *= scale;
+    }
+    j
+}

@@ -1,0 +1,137 @@
+//! Reading a trajectory CSV (as [`crate::output`] writes it) back.
+//!
+//! Required columns: `h_s` and `q1..qn`. `step`, `x y z`, `v`,
+//! `position_error`, `orientation_error` and `clearance` are read when present.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::problem::LoadError;
+
+/// One row of a trajectory file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrajectoryRow {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// Step number (the row index when the column is absent).
+    pub step: u64,
+    /// Step size that led to this row, seconds.
+    pub h: f64,
+    /// Joint values.
+    pub q: Vec<f64>,
+    /// Recorded end-effector position, if present.
+    pub position: Option<[f64; 3]>,
+    /// Recorded `V`, if present.
+    pub v: Option<f64>,
+    /// Recorded position error, if present.
+    pub position_error: Option<f64>,
+    /// Recorded orientation error, if present.
+    pub orientation_error: Option<f64>,
+    /// Recorded clearance `C - 1`, if present and not empty.
+    pub clearance: Option<f64>,
+}
+
+/// A joint trajectory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// Joints per row.
+    pub joints: usize,
+    /// Rows in file order.
+    pub rows: Vec<TrajectoryRow>,
+}
+
+/// Reads a trajectory CSV.
+pub fn read(path: &Path) -> Result<Trajectory, LoadError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| LoadError::new(path, None, format!("cannot read the file: {e}")))?;
+    parse(&text, path)
+}
+
+/// Parses trajectory CSV text.
+pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(text.as_bytes());
+    let headers = reader
+        .headers()
+        .map_err(|e| LoadError::new(path, Some(1), format!("bad header: {e}")))?
+        .clone();
+    let index: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
+    let mut joints = 0;
+    while index.contains_key(format!("q{}", joints + 1).as_str()) {
+        joints += 1;
+    }
+    if joints == 0 {
+        return Err(LoadError::new(
+            path,
+            Some(1),
+            "no joint columns (q1, q2, ...)",
+        ));
+    }
+    let Some(&h_col) = index.get("h_s") else {
+        return Err(LoadError::new(path, Some(1), "no step-size column `h_s`"));
+    };
+    let q_cols: Vec<usize> = (1..=joints)
+        .map(|j| index[format!("q{j}").as_str()])
+        .collect();
+    let col = |name: &str| index.get(name).copied();
+    let (step_col, x_col, y_col, z_col) = (col("step"), col("x"), col("y"), col("z"));
+    let (v_col, pe_col, oe_col, c_col) = (
+        col("v"),
+        col("position_error"),
+        col("orientation_error"),
+        col("clearance"),
+    );
+    let mut rows = Vec::new();
+    for (i, record) in reader.records().enumerate() {
+        let line = i + 2;
+        let record = record.map_err(|e| LoadError::new(path, Some(line), e.to_string()))?;
+        let number = |c: usize, name: &str| -> Result<f64, LoadError> {
+            let s = record.get(c).unwrap_or("").trim();
+            s.parse::<f64>().map_err(|_| {
+                LoadError::new(
+                    path,
+                    Some(line),
+                    format!("column `{name}`: \"{s}\" is not a number"),
+                )
+            })
+        };
+        let optional = |c: Option<usize>, name: &str| -> Result<Option<f64>, LoadError> {
+            match c {
+                Some(c) if !record.get(c).unwrap_or("").trim().is_empty() => {
+                    number(c, name).map(Some)
+                }
+                _ => Ok(None),
+            }
+        };
+        let q = q_cols
+            .iter()
+            .enumerate()
+            .map(|(j, &c)| number(c, &format!("q{}", j + 1)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let position = match (x_col, y_col, z_col) {
+            (Some(x), Some(y), Some(z)) => {
+                Some([number(x, "x")?, number(y, "y")?, number(z, "z")?])
+            }
+            _ => None,
+        };
+        rows.push(TrajectoryRow {
+            line,
+            step: match step_col {
+                Some(c) => number(c, "step")? as u64,
+                None => i as u64,
+            },
+            h: number(h_col, "h_s")?,
+            q,
+            position,
+            v: optional(v_col, "v")?,
+            position_error: optional(pe_col, "position_error")?,
+            orientation_error: optional(oe_col, "orientation_error")?,
+            clearance: optional(c_col, "clearance")?,
+        });
+    }
+    if rows.is_empty() {
+        return Err(LoadError::new(path, None, "the trajectory has no rows"));
+    }
+    Ok(Trajectory { joints, rows })
+}

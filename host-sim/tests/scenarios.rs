@@ -1,0 +1,153 @@
+//! The shipped scenarios run end to end, reach their targets (the dead end
+//! stalls), and the independent checker accepts their trajectories; the
+//! legacy `input.dat` and its TOML twin give the same trajectory; the checker
+//! rejects trajectories made to collide or to break a limit.
+
+use std::path::{Path, PathBuf};
+
+use capp_core::Outcome;
+use capp_sim::check::{self, ViolationKind};
+use capp_sim::output::rows_csv;
+use capp_sim::plan::{self, RunResult};
+use capp_sim::trajectory::{self, Trajectory};
+use capp_sim::Problem;
+
+fn scenario(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name)
+}
+
+fn plan(name: &str) -> (Problem, RunResult) {
+    let problem = Problem::load(&scenario(name)).unwrap_or_else(|e| panic!("{e}"));
+    let s = problem.validate().unwrap();
+    let result = plan::run(&problem, &s, |_| {}).unwrap();
+    (problem, result)
+}
+
+fn as_trajectory(problem: &Problem, result: &RunResult) -> Trajectory {
+    let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    trajectory::parse(&text, Path::new("trajectory.csv")).unwrap()
+}
+
+fn runs_and_checks(name: &str, expected: Outcome) -> (Problem, Trajectory) {
+    let (problem, result) = plan(name);
+    assert_eq!(result.outcome, expected, "{name}");
+    let t = as_trajectory(&problem, &result);
+    let report = check::check(&problem, &t);
+    assert!(report.accepted(), "{name}: {report}");
+    assert_eq!(
+        report.reaches_target,
+        expected == Outcome::Reached,
+        "{name}: {report}"
+    );
+    (problem, t)
+}
+
+#[test]
+fn pips_free_space_reaches() {
+    runs_and_checks("pips_free_space.toml", Outcome::Reached);
+}
+
+#[test]
+fn pips_payload_bay_reaches_around_the_payload() {
+    let (_, t) = runs_and_checks("pips_payload_bay.toml", Outcome::Reached);
+    // The payload actually constrains the path.
+    let closest = t
+        .rows
+        .iter()
+        .filter_map(|r| r.clearance)
+        .fold(f64::INFINITY, f64::min);
+    assert!(closest < 1.0, "closest approach C-1 = {closest}");
+}
+
+#[test]
+fn pips_dead_end_stalls() {
+    runs_and_checks("pips_dead_end.toml", Outcome::Stalled);
+}
+
+#[test]
+fn planar_arm_reaches() {
+    runs_and_checks("planar_arm.toml", Outcome::Reached);
+}
+
+#[test]
+fn legacy_input_and_its_toml_twin_give_the_same_trajectory() {
+    let (legacy, a) = plan("legacy/input.dat");
+    let (twin, b) = plan("legacy/twin.toml");
+    assert_eq!(a.outcome, Outcome::Reached);
+    assert_eq!(legacy.joints, twin.joints);
+    let n = legacy.joints.len();
+    assert_eq!(rows_csv(n, &a.rows).unwrap(), rows_csv(n, &b.rows).unwrap());
+    let report = check::check(&legacy, &as_trajectory(&legacy, &a));
+    assert!(report.accepted(), "{report}");
+}
+
+#[test]
+fn joints_dat_has_the_listing_layout() {
+    let (problem, result) = plan("legacy/input.dat");
+    let text = capp_sim::output::joints_dat(result.setpoints());
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 2 * result.setpoints().count());
+    // 18 joints: 9 values a line, "%f " each.
+    assert_eq!(lines[0].split_whitespace().count(), 9);
+    assert_eq!(
+        lines[0],
+        "1.570796 0.000000 20.000000 1.000000 0.000000 0.000000 0.000000 0.000000 0.000000 "
+    );
+    assert_eq!(problem.start.len(), 18);
+}
+
+fn planar() -> (Problem, Trajectory) {
+    let (problem, result) = plan("planar_arm.toml");
+    let t = as_trajectory(&problem, &result);
+    (problem, t)
+}
+
+#[test]
+fn check_rejects_a_joint_beyond_its_limit() {
+    let (problem, mut t) = planar();
+    let k = t.rows.len() / 2;
+    t.rows[k].q[1] = problem.joints[1].max as f64 + 0.01;
+    let report = check::check(&problem, &t);
+    assert!(!report.accepted());
+    assert!(report.has(ViolationKind::JointLimit), "{report}");
+    assert!(
+        report.to_string().contains("joint 2 (\"elbow\")"),
+        "{report}"
+    );
+}
+
+#[test]
+fn check_rejects_a_rate_violation() {
+    let (problem, mut t) = planar();
+    let k = t.rows.len() / 3;
+    // Twice as far as the step allows on the wrist.
+    let allowed = t.rows[k].h * problem.joints[2].max_rate as f64;
+    t.rows[k].q[2] = t.rows[k - 1].q[2] + 2.0 * allowed + 1e-3;
+    let report = check::check(&problem, &t);
+    assert!(report.has(ViolationKind::RateLimit), "{report}");
+}
+
+#[test]
+fn check_rejects_a_collision() {
+    let (problem, mut t) = planar();
+    // Point the straight arm at the post: its links pass through it.
+    let k = t.rows.len() / 2;
+    let angle = (0.42f64).atan2(0.9);
+    t.rows[k].q = vec![angle, 0.0, 0.0];
+    t.rows[k].position = None;
+    let report = check::check(&problem, &t);
+    assert!(report.has(ViolationKind::Collision), "{report}");
+    assert!(report.to_string().contains("\"post\""), "{report}");
+}
+
+#[test]
+fn check_rejects_a_wrong_recorded_position_and_a_wrong_start() {
+    let (problem, mut t) = planar();
+    t.rows[3].position = Some([5.0, 5.0, 5.0]);
+    t.rows[0].q[0] += 0.1;
+    let report = check::check(&problem, &t);
+    assert!(report.has(ViolationKind::Kinematics), "{report}");
+    assert!(report.has(ViolationKind::Shape), "{report}");
+}
