@@ -21,3 +21,6 @@ cargo test --workspace
 step "capp-core builds for Cortex-M4F and Cortex-M0+ (no_std, with and without defmt)"
 cargo build -p capp-core --target thumbv7em-none-eabihf
 cargo build -p capp-core --target thumbv6m-none-eabi --features defmt
+
+step "serial protocol, firmware (both boards) and the end-to-end test under QEMU"
+bash scripts/firmware.sh

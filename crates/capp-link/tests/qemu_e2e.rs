@@ -1,0 +1,236 @@
+//! End to end: the firmware under QEMU plans PIPS from home to a reachable
+//! pose, streamed over the emulated UART; the stream must be complete, its
+//! frames intact, and every joint vector bit-identical to capp-core's plan on
+//! the host. Then bad commands get their error replies and a valid plan still
+//! runs. Skipped (with a message) when qemu-system-arm or the firmware ELF is
+//! missing: build it with `cargo build --release` in firmware/.
+
+use std::time::Duration;
+
+use capp_core::kinematics::{forward_kinematics, Frames};
+use capp_core::setpoint::Decimator;
+use capp_core::{
+    pips, Mission, Phase, Planner, Robot, Scenario, SetpointFilter, Settings, Waypoint,
+};
+use capp_link::qemu::{default_elf, qemu_available, Qemu};
+use capp_link::{LinkError, Upload};
+use capp_proto::{Command, ErrorCode, Outcome, Reply, State, NO_COMMAND};
+
+/// A pose PIPS reaches: forward kinematics of home with a few joints moved.
+fn target() -> Waypoint {
+    let robot = pips::robot::<32>().unwrap();
+    let mut q = pips::home();
+    q[0] += 0.3;
+    q[5] += 0.25;
+    q[7] -= 0.2;
+    q[11] += 0.3;
+    let mut frames = Frames::<32>::default();
+    forward_kinematics(&robot, &q, &mut frames);
+    let p = frames.end_position();
+    let r = frames.end_rotation();
+    let rows = [
+        [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+        [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+        [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+    ];
+    Waypoint::pose([p.x, p.y, p.z], rows)
+}
+
+/// The host's plan: (step, joints) of every setpoint for decimation `every`.
+fn host_plan(
+    waypoints: &[Waypoint],
+    settings: Settings,
+    every: u32,
+) -> (Vec<(u32, Vec<f32>)>, Outcome) {
+    let robot = Robot::<32>::new(&pips::joints()).unwrap();
+    let mission = Mission::<16>::new(waypoints, settings).unwrap();
+    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
+    let mut decimator = Decimator::new(SetpointFilter::Every(every));
+    let mut out = Vec::new();
+    loop {
+        let report = planner.step(&scenario).unwrap();
+        if decimator.offer(&report) {
+            out.push((report.step, planner.joints().to_vec()));
+        }
+        if let Phase::Done(o) = report.phase {
+            return (out, o.into());
+        }
+    }
+}
+
+fn bits(v: &[f32]) -> Vec<u32> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
+    let elf = default_elf();
+    // scripts/firmware.sh sets CAPP_REQUIRE_QEMU=1: there, a skip is a failure.
+    let required = std::env::var_os("CAPP_REQUIRE_QEMU").is_some();
+    let missing = if !qemu_available() {
+        Some("qemu-system-arm is not installed (apt-get install qemu-system-arm)".to_string())
+    } else if !elf.exists() {
+        Some(format!(
+            "firmware ELF {} is missing (cd firmware && cargo build --release)",
+            elf.display()
+        ))
+    } else {
+        None
+    };
+    if let Some(why) = missing {
+        assert!(!required, "CAPP_REQUIRE_QEMU is set but {why}");
+        eprintln!("SKIPPED: {why}");
+        return;
+    }
+    let log = std::env::temp_dir().join(format!("capp-qemu-{}.defmt", std::process::id()));
+    let (_qemu, mut link) = Qemu::launch(&elf, Some(&log)).expect("boot QEMU");
+    link.timeout = Duration::from_secs(10);
+    assert_eq!(link.ping(0xC0FFEE).unwrap(), capp_proto::VERSION);
+
+    let settings = Settings::default();
+    let waypoints = [target()];
+    let joints = pips::joints();
+    let start = pips::home();
+    let upload = Upload {
+        joints: &joints,
+        obstacles: &[],
+        waypoints: &waypoints,
+        settings,
+        start: &start,
+    };
+    let (expected, outcome) = host_plan(&waypoints, settings, 1);
+    assert_eq!(outcome, Outcome::Reached, "the host plan reaches the pose");
+
+    link.upload(&upload).unwrap();
+    link.run(1).unwrap();
+    let record = link.receive_plan(Duration::from_secs(30)).unwrap();
+    eprintln!(
+        "plan: {} setpoints, status {:?}, frame errors {:?}",
+        record.setpoints.len(),
+        record.status,
+        record.frame_errors
+    );
+    assert_eq!(record.status.state, State::Done);
+    assert_eq!(record.status.outcome, Some(outcome));
+    assert_eq!(record.frame_errors.total(), 0, "no frame failed");
+    assert!(
+        record.missing.is_empty(),
+        "missing seqs {:?}",
+        record.missing
+    );
+    assert_eq!(record.status.dropped, 0);
+    assert_eq!(record.setpoints.len(), expected.len());
+    for (i, (got, (step, q))) in record.setpoints.iter().zip(&expected).enumerate() {
+        assert_eq!(got.seq, i as u32);
+        assert_eq!(got.step, *step);
+        assert_eq!(
+            bits(&got.joints),
+            bits(q),
+            "setpoint {i} (step {step}) differs"
+        );
+    }
+
+    // Bad commands: each gets its error reply, nothing changes on the board.
+    let bad_crc = {
+        let mut f = [0u8; 300];
+        let n = capp_proto::encode(&Command::Ping { nonce: 0x0101_0101 }, &mut f).unwrap();
+        // Corrupt a CRC byte (never to zero, which would cut the frame).
+        f[n - 2] = if f[n - 2] == 0x40 {
+            0x41
+        } else {
+            f[n - 2] ^ 0x40
+        };
+        f[..n].to_vec()
+    };
+    link.send_raw(&bad_crc).unwrap();
+    expect_error(&mut link, NO_COMMAND, ErrorCode::Crc);
+    // An unknown message (variant 200) with a valid CRC.
+    let unknown = raw_frame(&[capp_proto::VERSION, 200, 1]);
+    link.send_raw(&unknown).unwrap();
+    expect_error(&mut link, NO_COMMAND, ErrorCode::UnknownMessage);
+    // NaN in a joint.
+    let mut j: capp_proto::Joint = joints[0].into();
+    j.alpha = f32::NAN;
+    expect_refused(
+        &mut link,
+        &Command::Joint { index: 0, joint: j },
+        ErrorCode::NotFinite,
+    );
+    // An invalid robot: inverted limits, then Run.
+    link.request(&Command::Clear(capp_proto::Part::Robot))
+        .unwrap();
+    let mut j: capp_proto::Joint = joints[0].into();
+    j.min = 1.0;
+    j.max = -1.0;
+    link.request(&Command::Joint { index: 0, joint: j })
+        .unwrap();
+    expect_refused(
+        &mut link,
+        &Command::Run { every: 1 },
+        ErrorCode::InvalidRobot,
+    );
+    // The previous plan's status is kept.
+    let s = link.status().unwrap();
+    assert_eq!((s.state, s.outcome), (State::Done, Some(Outcome::Reached)));
+    assert_eq!(s.rx_errors, 2);
+    eprintln!("peak stack: {} bytes", s.stack_peak);
+
+    // A valid plan still runs, decimated this time.
+    link.upload(&upload).unwrap();
+    link.run(10).unwrap();
+    let record = link.receive_plan(Duration::from_secs(30)).unwrap();
+    let (expected, _) = host_plan(&waypoints, settings, 10);
+    assert!(record.missing.is_empty());
+    assert_eq!(record.frame_errors.total(), 0);
+    assert_eq!(record.setpoints.len(), expected.len());
+    for (got, (step, q)) in record.setpoints.iter().zip(&expected) {
+        assert_eq!(got.step, *step);
+        assert_eq!(bits(&got.joints), bits(q));
+    }
+    let s = link.status().unwrap();
+    eprintln!("final status {s:?}");
+}
+
+fn raw_frame(body: &[u8]) -> Vec<u8> {
+    let mut b = body.to_vec();
+    b.extend_from_slice(&capp_proto::crc::crc32(body).to_le_bytes());
+    let mut out = vec![0u8; 300];
+    let n = capp_proto::cobs::encode(&b, &mut out).unwrap();
+    out.truncate(n);
+    out.push(0);
+    out
+}
+
+fn expect_error<T: std::io::Read + std::io::Write>(
+    link: &mut capp_link::Link<T>,
+    command: u8,
+    code: ErrorCode,
+) {
+    let deadline = std::time::Instant::now() + Duration::from_secs(5);
+    match link.recv(deadline).unwrap() {
+        Reply::Error {
+            command: c,
+            code: e,
+            ..
+        } => assert_eq!((c, e), (command, code)),
+        other => panic!("expected an error reply, got {other:?}"),
+    }
+}
+
+fn expect_refused<T: std::io::Read + std::io::Write>(
+    link: &mut capp_link::Link<T>,
+    command: &Command,
+    code: ErrorCode,
+) {
+    match link.request(command) {
+        Err(LinkError::Refused {
+            command: c,
+            code: e,
+            ..
+        }) => {
+            assert_eq!((c, e), (command.code(), code))
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+}

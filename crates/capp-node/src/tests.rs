@@ -1,0 +1,313 @@
+//! The node driven through a simulated UART: complete streams when the UART
+//! keeps up, counted gaps when it does not, error replies for bad input.
+
+use std::collections::VecDeque;
+use std::vec::Vec;
+
+use capp_core::kinematics::{forward_kinematics, Frames};
+use capp_core::{pips, Mission, Phase, Planner, Robot, Scenario};
+use capp_proto::{
+    Accumulator, Command, ErrorCode, Joints, Outcome, Reply, State, MAX_FRAME, NO_COMMAND,
+};
+use embedded_hal_nb::{nb, serial};
+
+use super::*;
+
+/// A UART that takes at most `budget` bytes per `refill` (a slow line).
+struct FakeUart {
+    rx: VecDeque<u8>,
+    tx: Vec<u8>,
+    budget: usize,
+    left: usize,
+}
+
+impl FakeUart {
+    fn new(budget: usize) -> Self {
+        FakeUart {
+            rx: VecDeque::new(),
+            tx: Vec::new(),
+            budget,
+            left: budget,
+        }
+    }
+    fn send(&mut self, c: &Command) {
+        let mut f = [0u8; MAX_FRAME];
+        let n = capp_proto::encode(c, &mut f).unwrap();
+        self.rx.extend(&f[..n]);
+    }
+}
+
+impl serial::ErrorType for FakeUart {
+    type Error = serial::ErrorKind;
+}
+impl serial::Read<u8> for FakeUart {
+    fn read(&mut self) -> nb::Result<u8, Self::Error> {
+        self.rx.pop_front().ok_or(nb::Error::WouldBlock)
+    }
+}
+impl serial::Write<u8> for FakeUart {
+    fn write(&mut self, b: u8) -> nb::Result<(), Self::Error> {
+        if self.left == 0 {
+            return Err(nb::Error::WouldBlock);
+        }
+        self.left -= 1;
+        self.tx.push(b);
+        Ok(())
+    }
+    fn flush(&mut self) -> nb::Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+fn replies(bytes: &[u8]) -> Vec<Reply> {
+    let mut acc = Accumulator::<{ MAX_FRAME - 1 }>::new();
+    bytes
+        .iter()
+        .filter_map(|&b| acc.feed_message::<Reply>(b))
+        .map(|r| r.unwrap())
+        .collect()
+}
+
+fn target() -> capp_core::Waypoint {
+    let robot = pips::robot::<32>().unwrap();
+    let mut q = pips::home();
+    q[0] += 0.3;
+    q[5] += 0.25;
+    let mut frames = Frames::<32>::default();
+    forward_kinematics(&robot, &q, &mut frames);
+    let p = frames.end_position();
+    capp_core::Waypoint::at([p.x, p.y, p.z])
+}
+
+/// The host's plan: joint vector after every step.
+fn host_plan() -> Vec<Vec<f32>> {
+    let robot = Robot::<32>::new(&pips::joints()).unwrap();
+    let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
+    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
+    let mut out = Vec::new();
+    loop {
+        let r = planner.step(&scenario).unwrap();
+        out.push(planner.joints().to_vec());
+        if let Phase::Done(_) = r.phase {
+            return out;
+        }
+    }
+}
+
+fn load(uart: &mut FakeUart) {
+    uart.send(&Command::Clear(Part::All));
+    uart.send(&Command::Preset(Preset::Pips));
+    uart.send(&Command::Waypoint {
+        index: 0,
+        waypoint: target().into(),
+    });
+}
+
+/// Runs a plan with `budget` bytes of UART per tick; returns all replies after `Run`'s ack.
+fn run_plan(budget: usize) -> (Vec<Reply>, Vec<Vec<f32>>) {
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    load(&mut uart);
+    uart.send(&Command::Run { every: 1 });
+    node.poll(&mut uart);
+    node.poll(&mut uart);
+    let acks = replies(&uart.tx);
+    assert_eq!(acks.len(), 4);
+    assert!(
+        acks.iter().all(|r| matches!(r, Reply::Ack { .. })),
+        "{acks:?}"
+    );
+    uart.tx.clear();
+    uart.budget = budget;
+    for _ in 0..100_000 {
+        uart.left = uart.budget;
+        node.tick(1);
+        node.poll(&mut uart);
+        if node.status().state != State::Running && node.tx_len() == 0 {
+            break;
+        }
+    }
+    (replies(&uart.tx), host_plan())
+}
+
+#[test]
+fn a_fast_uart_gets_every_setpoint_bit_for_bit() {
+    let (replies, plan) = run_plan(usize::MAX);
+    let (last, setpoints) = replies.split_last().unwrap();
+    assert_eq!(setpoints.len(), plan.len());
+    for (i, r) in setpoints.iter().enumerate() {
+        let Reply::Setpoint { seq, step, joints } = r else {
+            panic!("{r:?}")
+        };
+        assert_eq!((*seq, *step), (i as u32, i as u32 + 1));
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(joints), bits(&plan[i]));
+    }
+    let Reply::Status(s) = last else { panic!() };
+    assert_eq!((s.state, s.outcome), (State::Done, Some(Outcome::Reached)));
+    assert_eq!((s.setpoints, s.dropped), (plan.len() as u32, 0));
+}
+
+#[test]
+fn a_slow_uart_shows_gaps_that_the_status_counts() {
+    // ~60 bytes per tick: less than one setpoint frame (~90 bytes) per step.
+    let (replies, plan) = run_plan(60);
+    let (last, setpoints) = replies.split_last().unwrap();
+    let Reply::Status(s) = last else {
+        panic!("{last:?}")
+    };
+    assert_eq!((s.state, s.outcome), (State::Done, Some(Outcome::Reached)));
+    assert_eq!(s.setpoints, plan.len() as u32);
+    assert!(s.dropped > 0);
+    let mut seen = std::vec![false; plan.len()];
+    let mut previous = None;
+    for r in setpoints {
+        let Reply::Setpoint { seq, step, joints } = r else {
+            panic!("{r:?}")
+        };
+        assert!(previous.is_none_or(|p| *seq > p), "in order");
+        previous = Some(*seq);
+        seen[*seq as usize] = true;
+        assert_eq!(*step, seq + 1);
+        assert_eq!(joints.as_slice(), plan[*seq as usize].as_slice());
+    }
+    let missing = seen.iter().filter(|s| !**s).count() as u32;
+    assert_eq!(missing, s.dropped, "every gap is a counted drop");
+}
+
+fn exchange(node: &mut Node<2048>, uart: &mut FakeUart) -> Vec<Reply> {
+    uart.tx.clear();
+    for _ in 0..4 {
+        node.poll(uart);
+    }
+    replies(&uart.tx)
+}
+
+#[test]
+fn bad_commands_get_errors_and_change_nothing() {
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    load(&mut uart);
+    uart.send(&Command::Run { every: 1 });
+    exchange(&mut node, &mut uart);
+    while node.status().state == State::Running {
+        node.tick(1);
+    }
+    let done = *node.status();
+    exchange(&mut node, &mut uart);
+
+    // A corrupted frame, then garbage longer than the buffer.
+    let mut f = [0u8; MAX_FRAME];
+    let n = capp_proto::encode(&Command::Status, &mut f).unwrap();
+    f[n - 2] = f[n - 2].wrapping_add(1).max(1);
+    uart.rx.extend(&f[..n]);
+    uart.rx.extend(std::iter::repeat_n(7u8, 600));
+    uart.rx.push_back(0);
+    let mut nan: capp_proto::Joint = pips::joints()[0].into();
+    nan.weight = f32::NAN;
+    uart.send(&Command::Joint {
+        index: 0,
+        joint: nan,
+    });
+    uart.send(&Command::Obstacle {
+        index: 5,
+        obstacle: capp_core::SuperEllipsoid::aligned([0.0; 3], [1.0; 3], 2.0).into(),
+    });
+    uart.send(&Command::Start(
+        Joints::from_slice(&[f32::INFINITY]).unwrap(),
+    ));
+    uart.send(&Command::Stop);
+    // A start outside the limits: Run is refused, the last plan stays.
+    let mut q = pips::home();
+    q[2] = 1000.0;
+    uart.send(&Command::Start(Joints::from_slice(&q).unwrap()));
+    uart.send(&Command::Run { every: 1 });
+    let got = exchange(&mut node, &mut uart);
+    let errors: Vec<_> = got
+        .iter()
+        .map(|r| match r {
+            Reply::Error {
+                command,
+                code,
+                index,
+            } => (*command, *code, *index),
+            Reply::Ack { command } => (*command, ErrorCode::Framing, 0xAA),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(
+        errors,
+        [
+            (NO_COMMAND, ErrorCode::Crc, NO_INDEX),
+            (NO_COMMAND, ErrorCode::Overfull, NO_INDEX),
+            (3, ErrorCode::NotFinite, 0),
+            (4, ErrorCode::OutOfOrder, 5),
+            (7, ErrorCode::NotFinite, 0),
+            (9, ErrorCode::NotRunning, NO_INDEX),
+            (7, ErrorCode::Framing, 0xAA), // the ack of the (finite) start
+            (8, ErrorCode::InvalidStart, 2),
+        ]
+    );
+    let after = *node.status();
+    assert_eq!(after.rx_errors, done.rx_errors + 2);
+    assert_eq!(
+        Status {
+            rx_errors: done.rx_errors,
+            ..after
+        },
+        done
+    );
+
+    // And the next valid plan runs.
+    uart.send(&Command::Start(Joints::from_slice(&pips::home()).unwrap()));
+    uart.send(&Command::Run { every: 1 });
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(got, [Reply::Ack { command: 7 }, Reply::Ack { command: 8 }]);
+    assert_eq!(node.status().state, State::Running);
+    // Run while running is refused; Stop acks and sends the final status.
+    node.tick(1);
+    uart.send(&Command::Run { every: 1 });
+    uart.send(&Command::Stop);
+    let got = exchange(&mut node, &mut uart);
+    let tail: Vec<_> = got
+        .iter()
+        .filter(|r| !matches!(r, Reply::Setpoint { .. }))
+        .collect();
+    assert!(matches!(
+        tail[0],
+        Reply::Error {
+            command: 8,
+            code: ErrorCode::Busy,
+            ..
+        }
+    ));
+    assert_eq!(tail[1], &Reply::Ack { command: 9 });
+    let Reply::Status(s) = tail[2] else { panic!() };
+    assert_eq!((s.state, s.step), (State::Stopped, 1));
+}
+
+#[test]
+fn replies_are_never_dropped_when_the_uart_stalls() {
+    // The UART takes nothing: the node stops reading once its reserve is used,
+    // so no command goes unanswered.
+    let mut node = Node::<{ RESERVE + 64 }>::new();
+    let mut uart = FakeUart::new(0);
+    for i in 0..50 {
+        uart.send(&Command::Ping { nonce: i });
+    }
+    for _ in 0..10 {
+        node.poll(&mut uart);
+    }
+    assert!(!uart.rx.is_empty(), "the node stopped reading");
+    uart.budget = usize::MAX;
+    for _ in 0..200 {
+        uart.left = usize::MAX;
+        node.poll(&mut uart);
+    }
+    let got = replies(&uart.tx);
+    assert_eq!(got.len(), 50);
+    for (i, r) in got.iter().enumerate() {
+        assert!(matches!(r, Reply::Pong { nonce, .. } if *nonce == i as u32));
+    }
+}

@@ -1,0 +1,167 @@
+//! Conversions to and from capp-core's types (feature `core`). Values are
+//! copied bit for bit; validation stays with capp-core's constructors.
+
+use capp_core::avoidance::AvoidanceSettings;
+use capp_core::control::{LawKind as CoreLaw, LawSettings};
+use capp_core::planner::Outcome as CoreOutcome;
+use capp_core::{JointKind as CoreKind, SuperEllipsoid};
+
+use crate::{Joint, JointKind, LawKind, Obstacle, Outcome, Settings, Waypoint};
+
+impl From<CoreKind> for JointKind {
+    fn from(k: CoreKind) -> Self {
+        match k {
+            CoreKind::Revolute => JointKind::Revolute,
+            CoreKind::Prismatic => JointKind::Prismatic,
+        }
+    }
+}
+
+impl From<JointKind> for CoreKind {
+    fn from(k: JointKind) -> Self {
+        match k {
+            JointKind::Revolute => CoreKind::Revolute,
+            JointKind::Prismatic => CoreKind::Prismatic,
+        }
+    }
+}
+
+impl From<capp_core::Joint> for Joint {
+    fn from(j: capp_core::Joint) -> Self {
+        Joint {
+            kind: j.kind.into(),
+            alpha: j.alpha,
+            a: j.a,
+            theta: j.theta,
+            d: j.d,
+            min: j.min,
+            max: j.max,
+            max_rate: j.max_rate,
+            weight: j.weight,
+        }
+    }
+}
+
+impl From<Joint> for capp_core::Joint {
+    fn from(j: Joint) -> Self {
+        capp_core::Joint {
+            kind: j.kind.into(),
+            alpha: j.alpha,
+            a: j.a,
+            theta: j.theta,
+            d: j.d,
+            min: j.min,
+            max: j.max,
+            max_rate: j.max_rate,
+            weight: j.weight,
+        }
+    }
+}
+
+impl From<SuperEllipsoid> for Obstacle {
+    fn from(s: SuperEllipsoid) -> Self {
+        Obstacle {
+            centre: s.centre,
+            semi_axes: s.semi_axes,
+            exponents: s.exponents,
+            euler_123: s.euler_123,
+        }
+    }
+}
+
+impl From<Obstacle> for SuperEllipsoid {
+    fn from(o: Obstacle) -> Self {
+        SuperEllipsoid {
+            centre: o.centre,
+            semi_axes: o.semi_axes,
+            exponents: o.exponents,
+            euler_123: o.euler_123,
+        }
+    }
+}
+
+impl From<capp_core::Waypoint> for Waypoint {
+    fn from(w: capp_core::Waypoint) -> Self {
+        Waypoint {
+            position: w.position,
+            orientation: w.orientation,
+        }
+    }
+}
+
+impl From<Waypoint> for capp_core::Waypoint {
+    fn from(w: Waypoint) -> Self {
+        capp_core::Waypoint {
+            position: w.position,
+            orientation: w.orientation,
+        }
+    }
+}
+
+impl From<capp_core::Settings> for Settings {
+    fn from(s: capp_core::Settings) -> Self {
+        Settings {
+            time_step_s: s.time_step_s,
+            fine_radius: s.fine_radius,
+            fine_step_fraction: s.fine_step_fraction,
+            position_tolerance: s.position_tolerance,
+            orientation_tolerance: s.orientation_tolerance,
+            law: match s.law.kind {
+                CoreLaw::Gradient => LawKind::Gradient,
+                CoreLaw::Paper => LawKind::Paper,
+            },
+            orientation_scale: s.law.orientation_scale,
+            approach_radius: s.law.approach_radius,
+            joint_margin: s.avoidance.joint_margin,
+            link_margin: s.avoidance.link_margin,
+            points_per_link: s.avoidance.points_per_link,
+            influence_distance: s.avoidance.influence_distance,
+            engage_clearance: s.avoidance.engage_clearance,
+            max_steps: s.max_steps,
+            stall_window: s.stall_window,
+            stall_progress: s.stall_progress,
+            max_halvings: s.max_halvings,
+        }
+    }
+}
+
+impl From<Settings> for capp_core::Settings {
+    fn from(s: Settings) -> Self {
+        capp_core::Settings {
+            time_step_s: s.time_step_s,
+            fine_radius: s.fine_radius,
+            fine_step_fraction: s.fine_step_fraction,
+            position_tolerance: s.position_tolerance,
+            orientation_tolerance: s.orientation_tolerance,
+            law: LawSettings {
+                kind: match s.law {
+                    LawKind::Gradient => CoreLaw::Gradient,
+                    LawKind::Paper => CoreLaw::Paper,
+                },
+                orientation_scale: s.orientation_scale,
+                approach_radius: s.approach_radius,
+            },
+            avoidance: AvoidanceSettings {
+                joint_margin: s.joint_margin,
+                link_margin: s.link_margin,
+                points_per_link: s.points_per_link,
+                influence_distance: s.influence_distance,
+                engage_clearance: s.engage_clearance,
+            },
+            max_steps: s.max_steps,
+            stall_window: s.stall_window,
+            stall_progress: s.stall_progress,
+            max_halvings: s.max_halvings,
+        }
+    }
+}
+
+impl From<CoreOutcome> for Outcome {
+    fn from(o: CoreOutcome) -> Self {
+        match o {
+            CoreOutcome::Reached => Outcome::Reached,
+            CoreOutcome::Stalled => Outcome::Stalled,
+            CoreOutcome::Capped => Outcome::Capped,
+        }
+    }
+}

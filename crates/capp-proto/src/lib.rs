@@ -1,0 +1,388 @@
+//! # capp-proto: the CAPP serial protocol
+//!
+//! The messages a host (or a joint controller) and a CAPP board exchange over
+//! a UART, and their framing. Both ends use this crate; `PROTOCOL.md` in the
+//! crate directory specifies the same bytes for implementers in other languages.
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`crc`] | CRC-32/ISO-HDLC |
+//! | [`cobs`] | COBS encoding and in-place decoding |
+//! | [`frame`] | frame layout, [`frame::encode`], [`frame::decode`], the receive [`frame::Accumulator`] |
+//! | this module | the messages: [`Command`] (host to board) and [`Reply`] (board to host) |
+//!
+//! The payload is postcard's wire format (varint integers, little-endian
+//! `f32`, enum variants as varint indices, structs as their fields in order).
+//! **Stability rule:** a change to any type below that changes its bytes
+//! changes [`VERSION`]; variants and fields are only ever appended.
+//!
+//! Nothing here allocates or panics on received bytes.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod cobs;
+#[cfg(feature = "core")]
+mod convert;
+pub mod crc;
+pub mod frame;
+
+pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
+
+use serde::{Deserialize, Serialize};
+
+/// Protocol version: the first byte of every frame body.
+pub const VERSION: u8 = 1;
+/// Most joints a load may hold.
+pub const MAX_JOINTS: usize = 32;
+/// Most obstacles a load may hold.
+pub const MAX_OBSTACLES: usize = 64;
+/// Most waypoints a load may hold.
+pub const MAX_WAYPOINTS: usize = 16;
+/// The `command` field of an [`Reply::Error`] when the command could not be
+/// decoded (framing, CRC, version, unknown message).
+pub const NO_COMMAND: u8 = 0xFF;
+/// The `index` field of an [`Reply::Error`] when no item is concerned.
+pub const NO_INDEX: u8 = 0xFF;
+
+/// A joint vector on the wire.
+pub type Joints = heapless::Vec<f32, MAX_JOINTS>;
+
+/// Revolute or prismatic.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum JointKind {
+    /// Variable `theta`, radians.
+    Revolute,
+    /// Variable `d`, length units.
+    Prismatic,
+}
+
+/// One joint and its link (capp-core's `Joint`, field for field).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Joint {
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Link twist, radians.
+    pub alpha: f32,
+    /// Link length.
+    pub a: f32,
+    /// Fixed angle of a prismatic joint, radians.
+    pub theta: f32,
+    /// Fixed offset of a revolute joint.
+    pub d: f32,
+    /// Lower limit.
+    pub min: f32,
+    /// Upper limit.
+    pub max: f32,
+    /// Rate limit, per second.
+    pub max_rate: f32,
+    /// Weight in `(0, 1]`.
+    pub weight: f32,
+}
+
+/// A super-ellipsoid obstacle (capp-core's `SuperEllipsoid`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Obstacle {
+    /// Centre.
+    pub centre: [f32; 3],
+    /// Semi-axes.
+    pub semi_axes: [f32; 3],
+    /// Exponents.
+    pub exponents: [f32; 3],
+    /// Euler angles (1-2-3), radians.
+    pub euler_123: [f32; 3],
+}
+
+/// A waypoint: a position and optionally a rotation matrix, row by row.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Waypoint {
+    /// Position.
+    pub position: [f32; 3],
+    /// Orientation rows, or none.
+    pub orientation: Option<[[f32; 3]; 3]>,
+}
+
+/// Which form of the control law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LawKind {
+    /// Normalised total gradient (the default).
+    Gradient,
+    /// Eq. 15 as printed.
+    Paper,
+}
+
+/// Every planner setting (capp-core's `Settings`, flattened).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// Largest integration step, seconds.
+    pub time_step_s: f32,
+    /// Radius of the fine-step zone.
+    pub fine_radius: f32,
+    /// Fraction of the step inside it.
+    pub fine_step_fraction: f32,
+    /// Position tolerance.
+    pub position_tolerance: f32,
+    /// Orientation tolerance.
+    pub orientation_tolerance: f32,
+    /// Law form.
+    pub law: LawKind,
+    /// Orientation length scale.
+    pub orientation_scale: f32,
+    /// Approach radius.
+    pub approach_radius: f32,
+    /// Margin of joint points.
+    pub joint_margin: f32,
+    /// Margin of link points.
+    pub link_margin: f32,
+    /// Interior avoidance points per link.
+    pub points_per_link: u8,
+    /// Influence distance.
+    pub influence_distance: f32,
+    /// Clearance `C - 1` below which approaching motion is removed in full.
+    pub engage_clearance: f32,
+    /// Iteration cap.
+    pub max_steps: u32,
+    /// Stall window, steps.
+    pub stall_window: u32,
+    /// Relative progress that counts.
+    pub stall_progress: f32,
+    /// Most step halvings.
+    pub max_halvings: u8,
+}
+
+/// A built-in robot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Preset {
+    /// The 18-joint PIPS of the paper's Table 1; start = its home.
+    Pips,
+}
+
+/// Which part of the load [`Command::Clear`] empties.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Part {
+    /// Everything: joints, obstacles, waypoints, start; settings to defaults.
+    All,
+    /// The joints (and the start).
+    Robot,
+    /// The obstacles.
+    Obstacles,
+    /// The waypoints.
+    Waypoints,
+}
+
+/// Host to board. Each is answered by exactly one reply: [`Reply::Pong`] for
+/// `Ping`, [`Reply::Status`] for `Status`, otherwise [`Reply::Ack`] or [`Reply::Error`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command {
+    /// 0: liveness and version check.
+    Ping {
+        /// Echoed in the pong.
+        nonce: u32,
+    },
+    /// 1: empty part of the load being built.
+    Clear(Part),
+    /// 2: replace the load's joints and start by a preset's.
+    Preset(Preset),
+    /// 3: append a joint; `index` must equal the number of joints loaded.
+    Joint {
+        /// Position in the chain (0-based).
+        index: u8,
+        /// The joint.
+        joint: Joint,
+    },
+    /// 4: append an obstacle; `index` must equal the number loaded.
+    Obstacle {
+        /// Index (0-based).
+        index: u8,
+        /// The obstacle.
+        obstacle: Obstacle,
+    },
+    /// 5: append a waypoint; `index` must equal the number loaded.
+    Waypoint {
+        /// Index (0-based); the last waypoint is the target.
+        index: u8,
+        /// The waypoint.
+        waypoint: Waypoint,
+    },
+    /// 6: replace the settings.
+    Settings(Settings),
+    /// 7: the start configuration (one value per joint).
+    Start(Joints),
+    /// 8: validate the load and start planning, streaming a setpoint every
+    /// `every` steps (0 is read as 1) plus the last.
+    Run {
+        /// Decimation.
+        every: u32,
+    },
+    /// 9: stop a running plan (a final status follows the ack).
+    Stop,
+    /// 10: ask for a status.
+    Status,
+}
+
+impl Command {
+    /// The variant index, as echoed in [`Reply::Ack`] and [`Reply::Error`].
+    pub fn code(&self) -> u8 {
+        match self {
+            Command::Ping { .. } => 0,
+            Command::Clear(_) => 1,
+            Command::Preset(_) => 2,
+            Command::Joint { .. } => 3,
+            Command::Obstacle { .. } => 4,
+            Command::Waypoint { .. } => 5,
+            Command::Settings(_) => 6,
+            Command::Start(_) => 7,
+            Command::Run { .. } => 8,
+            Command::Stop => 9,
+            Command::Status => 10,
+        }
+    }
+}
+
+/// Why a command was refused. The board keeps its previous state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ErrorCode {
+    /// 0: the bytes between delimiters are not valid COBS or too short.
+    Framing,
+    /// 1: CRC mismatch.
+    Crc,
+    /// 2: the frame's version byte is not [`VERSION`].
+    Version,
+    /// 3: unknown message or malformed payload.
+    UnknownMessage,
+    /// 4: a frame longer than the receive buffer.
+    Overfull,
+    /// 5: a NaN or infinite value (`index` = the item).
+    NotFinite,
+    /// 6: `index` is not the next free index.
+    OutOfOrder,
+    /// 7: more items than the capacity.
+    Capacity,
+    /// 8: the robot failed validation (`index` = the joint, or `NO_INDEX`).
+    InvalidRobot,
+    /// 9: an obstacle failed validation (`index` = the obstacle).
+    InvalidObstacle,
+    /// 10: the waypoints or settings failed validation (`index` = the waypoint).
+    InvalidMission,
+    /// 11: the start configuration is invalid (`index` = the joint).
+    InvalidStart,
+    /// 12: not allowed while a plan runs (load or run); send `Stop` first.
+    Busy,
+    /// 13: `Stop` while no plan runs.
+    NotRunning,
+}
+
+/// Where the board is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum State {
+    /// No plan has run since boot.
+    Idle,
+    /// Planning and streaming.
+    Running,
+    /// The last plan ended by itself (see `outcome`).
+    Done,
+    /// The last plan was stopped by the host.
+    Stopped,
+}
+
+/// How a plan ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Outcome {
+    /// Reached the target.
+    Reached,
+    /// Dead end.
+    Stalled,
+    /// Iteration cap.
+    Capped,
+}
+
+/// The board's state and counters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// State.
+    pub state: State,
+    /// Outcome when `Done`.
+    pub outcome: Option<Outcome>,
+    /// Planner steps taken in the current / last plan.
+    pub step: u32,
+    /// Lyapunov value `V` after the last step.
+    pub v: f32,
+    /// Position error after the last step.
+    pub position_error: f32,
+    /// Orientation error after the last step.
+    pub orientation_error: f32,
+    /// Smallest clearance `C - 1` within influence, if any.
+    pub clearance: Option<f32>,
+    /// Setpoints produced in this plan: sequence numbers `0..setpoints` were
+    /// used, whether sent or dropped.
+    pub setpoints: u32,
+    /// Setpoints dropped because the transmit queue was full.
+    pub dropped: u32,
+    /// Bad frames received since boot.
+    pub rx_errors: u32,
+    /// Timer ticks that arrived while a step was still running, this plan.
+    pub overruns: u32,
+    /// Deepest stack use measured since boot, bytes (0 if not measured).
+    pub stack_peak: u32,
+}
+
+/// Board to host.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Reply {
+    /// 0: answer to `Ping`.
+    Pong {
+        /// The ping's nonce.
+        nonce: u32,
+        /// [`VERSION`].
+        version: u8,
+        /// Joint capacity.
+        max_joints: u8,
+        /// Obstacle capacity.
+        max_obstacles: u8,
+        /// Waypoint capacity.
+        max_waypoints: u8,
+    },
+    /// 1: the command with this code was accepted.
+    Ack {
+        /// [`Command::code`] of the command.
+        command: u8,
+    },
+    /// 2: a command was refused, or a frame was bad.
+    Error {
+        /// [`Command::code`], or [`NO_COMMAND`].
+        command: u8,
+        /// Why.
+        code: ErrorCode,
+        /// The item concerned, or [`NO_INDEX`].
+        index: u8,
+    },
+    /// 3: one joint vector of the plan.
+    Setpoint {
+        /// Sequence number: 0 for the first setpoint of a plan, +1 for every
+        /// setpoint produced (a gap = setpoints dropped or lost).
+        seq: u32,
+        /// Planner step this vector follows.
+        step: u32,
+        /// The joint vector.
+        joints: Joints,
+    },
+    /// 4: status, on request and at the end of every plan.
+    Status(Status),
+}

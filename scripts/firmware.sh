@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The serial stack's checks: the no_std protocol and node crates for thumb
+# targets, the firmware for both boards (fmt, clippy, build), its size, and
+# the end-to-end test under QEMU (which must run here, not skip).
+# Needs: rustup targets thumbv7em-none-eabihf thumbv6m-none-eabi; the Debian
+# package qemu-system-arm (installed here if missing and we are root).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== %s\n' "$*"; }
+
+if ! command -v qemu-system-arm >/dev/null; then
+  step "installing qemu-system-arm"
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update -qq && apt-get install -y -qq qemu-system-arm >/dev/null
+  else
+    sudo apt-get update -qq && sudo apt-get install -y -qq qemu-system-arm >/dev/null
+  fi
+fi
+
+step "capp-proto and capp-node build for Cortex-M4F and Cortex-M0+ (no_std, with and without defmt)"
+cargo build -p capp-proto -p capp-node --target thumbv7em-none-eabihf
+cargo build -p capp-proto -p capp-node --target thumbv6m-none-eabi --features capp-node/defmt
+
+step "firmware: format, lints, both boards"
+(
+  cd firmware
+  cargo fmt --check
+  cargo clippy --release -- -D warnings
+  cargo clippy --release --no-default-features --features nucleo-f446re --target-dir target/f446 -- -D warnings
+  cargo build --release
+  cargo build --release --no-default-features --features nucleo-f446re --target-dir target/f446
+)
+
+step "firmware size (flash = .vector_table + .text + .rodata + .data; RAM = .data + .bss + .uninit + stack)"
+for elf in firmware/target/thumbv7em-none-eabihf/release/capp-firmware \
+           firmware/target/f446/thumbv7em-none-eabihf/release/capp-firmware; do
+  echo "$elf"
+  size -A "$elf" | grep -E '^\.(vector_table|text|rodata|data|bss|uninit) '
+done
+
+step "end to end under QEMU (mps2-an386)"
+CAPP_REQUIRE_QEMU=1 cargo test -p capp-link --test qemu_e2e -- --nocapture
