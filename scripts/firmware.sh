@@ -40,4 +40,4 @@ for elf in firmware/target/thumbv7em-none-eabihf/release/capp-firmware \
 done
 
 step "end to end under QEMU (mps2-an386)"
-CAPP_REQUIRE_QEMU=1 cargo test -p capp-link --test qemu_e2e -- --nocapture
+CAPP_REQUIRE_QEMU=1 cargo test -p capp-system-tests -- --nocapture

@@ -3,9 +3,9 @@
 //! Loads a planning problem (a TOML scenario, or the listing's own `input.dat`),
 //! runs `capp-core` on it, writes the results (trajectory CSV, the decimated
 //! setpoint stream, `joints.dat`, a summary), checks a trajectory independently
-//! of the planner, and draws pictures of it. The `capp` binary is a thin
-//! command-line front end over these modules; a `capp serial` front end can
-//! reuse [`problem`], [`scenario_file`], [`legacy`] and [`output`] unchanged.
+//! of the planner, and draws pictures of it; or has a board (or the firmware
+//! under QEMU) plan it and receives the stream ([`serial`]). The `capp`
+//! binary is [`cli`], a thin command-line front end over these modules.
 //!
 //! | module | owns |
 //! |---|---|
@@ -17,18 +17,22 @@
 //! | [`trajectory`] | reading a trajectory CSV back |
 //! | [`check`] | the independent f64 checker (own kinematics, own super-ellipsoids) |
 //! | [`render`] | SVG/PNG pictures and the HTML animation |
+//! | [`serial`] | `capp serial`: upload to a board, receive its stream, account for every setpoint |
+//! | [`cli`] | the `capp` command line |
 //!
 //! Units: radians, the scenario's length unit, seconds, everywhere after loading.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod check;
+pub mod cli;
 pub mod legacy;
 pub mod output;
 pub mod plan;
 pub mod problem;
 pub mod render;
 pub mod scenario_file;
+pub mod serial;
 pub mod trajectory;
 
 pub use problem::{LoadError, Problem};

@@ -72,7 +72,9 @@ pub fn header(n: usize) -> Vec<String> {
 }
 
 /// Rows as CSV text (full `f32` precision: values read back bit for bit).
-/// Clearance point and obstacle are 1-based; empty when nothing is within influence.
+/// Clearance point and obstacle are 1-based; empty when nothing is within
+/// influence. `constrained` and `halvings` are empty where not known (a plan
+/// received from a board).
 pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result<String> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(header(n))?;
@@ -93,8 +95,11 @@ pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result
             None => rec.extend([String::new(), String::new(), String::new()]),
         }
         rec.push((r.waypoint as u32 + 1).to_string());
-        rec.push(u8::from(r.constrained).to_string());
-        rec.push(r.halvings.to_string());
+        rec.push(
+            r.constrained
+                .map_or(String::new(), |c| u8::from(c).to_string()),
+        );
+        rec.push(r.halvings.map_or(String::new(), |h| h.to_string()));
         w.write_record(&rec)?;
     }
     Ok(String::from_utf8(w.into_inner()?)?)
@@ -134,6 +139,8 @@ pub struct Summary {
     pub wall_time_s: f64,
     /// Length unit name.
     pub unit: String,
+    /// For a plan received from a board: what happened on the line.
+    pub link: Option<crate::serial::LinkReport>,
 }
 
 impl Summary {
@@ -190,6 +197,7 @@ impl Summary {
             setpoints: result.setpoints().count(),
             wall_time_s: result.wall_time.as_secs_f64(),
             unit: problem.length_unit.clone(),
+            link: None,
         }
     }
 }
@@ -226,7 +234,15 @@ impl fmt::Display for Summary {
             self.range_use.1
         )?;
         writeln!(f, "setpoints:         {}", self.setpoints)?;
-        writeln!(f, "wall time:         {:.3} s", self.wall_time_s)
+        writeln!(f, "wall time:         {:.3} s", self.wall_time_s)?;
+        if let Some(link) = &self.link {
+            writeln!(
+                f,
+                "planned by:        the board (rows are its setpoints; clearance, errors and range use over them)"
+            )?;
+            write!(f, "{link}")?;
+        }
+        Ok(())
     }
 }
 

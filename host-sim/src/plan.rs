@@ -35,10 +35,11 @@ pub struct Row {
     pub clearance: Option<Clearance>,
     /// Active waypoint, 0-based (the last one once the run is over).
     pub waypoint: u8,
-    /// Whether the obstacle projection changed the rate.
-    pub constrained: bool,
-    /// Step halvings.
-    pub halvings: u8,
+    /// Whether the obstacle projection changed the rate (`None`: not known,
+    /// e.g. a setpoint received from a board).
+    pub constrained: Option<bool>,
+    /// Step halvings (`None`: not known).
+    pub halvings: Option<u8>,
     /// Whether this row is in the decimated setpoint stream.
     pub setpoint: bool,
 }
@@ -84,8 +85,8 @@ fn row(planner: &CorePlanner, report: &StepReport, waypoints: usize, setpoint: b
             Phase::Moving { waypoint } => waypoint,
             Phase::Done(_) => (waypoints - 1) as u8,
         },
-        constrained: report.constrained,
-        halvings: report.halvings,
+        constrained: Some(report.constrained),
+        halvings: Some(report.halvings),
         setpoint,
     }
 }

@@ -110,6 +110,10 @@ pub struct Setpoint {
     pub step: u32,
     /// Joint vector.
     pub joints: Vec<f32>,
+    /// Plan time, seconds.
+    pub time_s: f32,
+    /// The waypoint being approached, 0-based.
+    pub waypoint: u8,
 }
 
 /// Everything received for one plan.
@@ -241,13 +245,18 @@ impl<T: Read + Write> Link<T> {
     }
 
     /// Sends `command` and waits for its reply (an ack, pong, status or error),
-    /// skipping setpoints. A refusal is an error.
+    /// skipping setpoints (and statuses, unless `command` asks for one). A
+    /// refusal is an error.
     pub fn request(&mut self, command: &Command) -> Result<Reply, LinkError> {
         self.send(command)?;
         let deadline = Instant::now() + self.timeout;
+        let wants_status = matches!(command, Command::Status);
         loop {
             match self.recv(deadline)? {
                 Reply::Setpoint { .. } => continue,
+                // A plan's final status (or the answer to a status poll)
+                // that arrived after its stream was read.
+                Reply::Status(_) if !wants_status => continue,
                 Reply::Error {
                     command,
                     code,
@@ -326,9 +335,10 @@ impl<T: Read + Write> Link<T> {
         self.expect_ack(&Command::Start(start))
     }
 
-    /// Starts the plan, a setpoint every `every` steps.
-    pub fn run(&mut self, every: u32) -> Result<(), LinkError> {
-        self.expect_ack(&Command::Run { every })
+    /// Starts the plan; `filter` picks the setpoints streamed (the start and
+    /// the last step always are).
+    pub fn run(&mut self, filter: capp_core::SetpointFilter) -> Result<(), LinkError> {
+        self.expect_ack(&capp_proto::run_command(filter))
     }
 
     /// Stops a running plan.
@@ -339,17 +349,60 @@ impl<T: Read + Write> Link<T> {
     /// Receives a running plan's stream up to its final status; gives up if
     /// nothing arrives for `idle`.
     pub fn receive_plan(&mut self, idle: Duration) -> Result<PlanRecord, LinkError> {
+        self.receive_plan_watching(idle, |_| {})
+    }
+
+    /// [`Link::receive_plan`], asking for a `Status` whenever the line has
+    /// been quiet for a quarter of `idle` (a plan may go seconds without a
+    /// setpoint, and a final status may be lost on the line); every status
+    /// that arrives is passed to `watch`. Gives up after `idle` without a
+    /// good frame.
+    pub fn receive_plan_watching(
+        &mut self,
+        idle: Duration,
+        mut watch: impl FnMut(&Status),
+    ) -> Result<PlanRecord, LinkError> {
         let errors_before = self.frame_errors;
+        let poll = idle / 4;
         let mut setpoints = Vec::new();
+        let mut last_frame = Instant::now();
+        let mut next_poll = last_frame + poll;
         let status = loop {
-            match self.recv(Instant::now() + idle)? {
-                Reply::Setpoint { seq, step, joints } => setpoints.push(Setpoint {
+            let reply = match self.recv(next_poll.min(last_frame + idle)) {
+                Ok(reply) => reply,
+                Err(LinkError::Timeout) => {
+                    let now = Instant::now();
+                    if now >= last_frame + idle {
+                        return Err(LinkError::Timeout);
+                    }
+                    self.send(&Command::Status)?;
+                    next_poll = now + poll;
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            last_frame = Instant::now();
+            next_poll = last_frame + poll;
+            match reply {
+                Reply::Setpoint {
+                    seq,
+                    step,
+                    joints,
+                    time_s,
+                    waypoint,
+                } => setpoints.push(Setpoint {
                     seq,
                     step,
                     joints: joints.to_vec(),
+                    time_s,
+                    waypoint,
                 }),
-                Reply::Status(s) if s.state != State::Running => break s,
-                Reply::Status(_) => {}
+                Reply::Status(s) => {
+                    watch(&s);
+                    if s.state != State::Running {
+                        break s;
+                    }
+                }
                 other => return Err(LinkError::Unexpected(Box::new(other))),
             }
         };

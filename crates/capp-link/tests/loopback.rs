@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use capp_core::kinematics::{forward_kinematics, Frames};
-use capp_core::{pips, Settings, Waypoint};
+use capp_core::{pips, SetpointFilter, Settings, Waypoint};
 use capp_link::{Link, Upload};
 use capp_node::Node;
 use capp_proto::{Outcome, State};
@@ -108,7 +108,7 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
         start: &home,
     })
     .unwrap();
-    link.run(1).unwrap();
+    link.run(SetpointFilter::Every(1)).unwrap();
     let record = link.receive_plan(Duration::from_secs(20)).unwrap();
     quit.store(true, Ordering::Relaxed);
     t.join().unwrap();

@@ -91,6 +91,10 @@ struct Active {
     scenario: Scenario<N, M, W>,
     planner: Planner<N>,
     decimator: Decimator,
+    /// Whether the start setpoint was offered (at the first tick, after `Run`'s ack).
+    streaming: bool,
+    /// Plan time, seconds: the sum of the step sizes taken.
+    time_s: f32,
 }
 
 type Refusal = (ErrorCode, u8);
@@ -294,11 +298,19 @@ impl<const TXQ: usize> Node<TXQ> {
                 }
                 d.start = q.clone();
             }
-            Command::Run { every } => {
+            Command::Run {
+                every,
+                error_change,
+            } => {
                 if self.status.state == State::Running || self.final_pending {
                     return Err((ErrorCode::Busy, NO_INDEX));
                 }
-                self.start(*every)?;
+                if error_change
+                    .is_some_and(|c| !(c.position.is_finite() && c.orientation.is_finite()))
+                {
+                    return Err((ErrorCode::NotFinite, NO_INDEX));
+                }
+                self.start(capp_proto::setpoint_filter(*every, *error_change))?;
             }
             Command::Stop => {
                 if self.status.state != State::Running {
@@ -320,7 +332,7 @@ impl<const TXQ: usize> Node<TXQ> {
     /// Not inlined: its scenario-sized temporaries stay off the stack of the
     /// serving loop.
     #[inline(never)]
-    fn start(&mut self, every: u32) -> Result<(), Refusal> {
+    fn start(&mut self, filter: SetpointFilter) -> Result<(), Refusal> {
         let d = &self.draft;
         let robot = Robot::<N>::new(&d.joints).map_err(robot_refusal)?;
         let mission = Mission::<W>::new(&d.waypoints, d.settings.unwrap_or_default())
@@ -330,7 +342,9 @@ impl<const TXQ: usize> Node<TXQ> {
         self.active = Some(Active {
             scenario,
             planner,
-            decimator: Decimator::new(SetpointFilter::Every(every.max(1))),
+            decimator: Decimator::new(filter),
+            streaming: false,
+            time_s: 0.0,
         });
         let s = &mut self.status;
         s.state = State::Running;
@@ -356,6 +370,15 @@ impl<const TXQ: usize> Node<TXQ> {
         let Some(active) = self.active.as_mut() else {
             return;
         };
+        if !active.streaming {
+            // The start configuration is the stream's first setpoint (seq 0).
+            active.streaming = true;
+            let start = *active.planner.last_report();
+            self.offer_setpoint(&start);
+        }
+        let Some(active) = self.active.as_mut() else {
+            return;
+        };
         let report = match active.planner.step(&active.scenario) {
             Ok(r) => r,
             Err(_) => {
@@ -365,43 +388,60 @@ impl<const TXQ: usize> Node<TXQ> {
                 return;
             }
         };
+        active.time_s += report.time_step_s;
         let s = &mut self.status;
         s.step = report.step;
         s.v = report.v;
         s.position_error = report.position_error;
         s.orientation_error = report.orientation_error;
         s.clearance = report.clearance.map(|c| c.value);
-        if active.decimator.offer(&report) {
-            let seq = s.setpoints;
-            s.setpoints = s.setpoints.wrapping_add(1);
-            let joints = Vec::from_slice(active.planner.joints()).unwrap_or_default();
-            let mut frame = [0u8; MAX_FRAME];
-            let sent = match capp_proto::encode(
-                &Reply::Setpoint {
-                    seq,
-                    step: report.step,
-                    joints,
-                },
-                &mut frame,
-            ) {
-                Ok(n) if TXQ - self.tx.len() >= n + RESERVE => {
-                    for &b in &frame[..n] {
-                        let _ = self.tx.push_back(b);
-                    }
-                    true
-                }
-                _ => false,
-            };
-            if !sent {
-                s.dropped = s.dropped.wrapping_add(1);
-            }
-        }
+        self.offer_setpoint(&report);
+        let s = &mut self.status;
         if let Phase::Done(outcome) = report.phase {
             s.state = State::Done;
             s.outcome = Some(outcome.into());
             self.final_pending = true;
             log::info!("plan done after {} steps", report.step);
             self.flush_final();
+        }
+    }
+
+    /// Offers the joint vector after `report` to the decimator; a setpoint
+    /// takes the next sequence number and is queued, or dropped (and counted)
+    /// if it does not fit beside the reply reserve.
+    fn offer_setpoint(&mut self, report: &capp_core::StepReport) {
+        let Some(active) = self.active.as_mut() else {
+            return;
+        };
+        if !active.decimator.offer(report) {
+            return;
+        }
+        let s = &mut self.status;
+        let seq = s.setpoints;
+        s.setpoints = s.setpoints.wrapping_add(1);
+        let last_waypoint = active.scenario.waypoints().len().saturating_sub(1) as u8;
+        let setpoint = Reply::Setpoint {
+            seq,
+            step: report.step,
+            joints: Vec::from_slice(active.planner.joints()).unwrap_or_default(),
+            time_s: active.time_s,
+            waypoint: match report.phase {
+                Phase::Moving { waypoint } => waypoint,
+                Phase::Done(_) => last_waypoint,
+            },
+        };
+        let mut frame = [0u8; MAX_FRAME];
+        let sent = match capp_proto::encode(&setpoint, &mut frame) {
+            Ok(n) if TXQ - self.tx.len() >= n + RESERVE => {
+                for &b in &frame[..n] {
+                    let _ = self.tx.push_back(b);
+                }
+                true
+            }
+            _ => false,
+        };
+        if !sent {
+            s.dropped = s.dropped.wrapping_add(1);
         }
     }
 

@@ -79,16 +79,19 @@ fn target() -> capp_core::Waypoint {
     capp_core::Waypoint::at([p.x, p.y, p.z])
 }
 
-/// The host's plan: joint vector after every step.
-fn host_plan() -> Vec<Vec<f32>> {
+/// The host's plan: the start, then the joint vector after every step, each
+/// with its plan time (the f32 sum of the step sizes, as the board keeps it).
+fn host_plan() -> Vec<(Vec<f32>, f32)> {
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
     let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
-    let mut out = Vec::new();
+    let mut out = std::vec![(planner.joints().to_vec(), 0.0)];
+    let mut time_s = 0.0f32;
     loop {
         let r = planner.step(&scenario).unwrap();
-        out.push(planner.joints().to_vec());
+        time_s += r.time_step_s;
+        out.push((planner.joints().to_vec(), time_s));
         if let Phase::Done(_) = r.phase {
             return out;
         }
@@ -105,11 +108,22 @@ fn load(uart: &mut FakeUart) {
 }
 
 /// Runs a plan with `budget` bytes of UART per tick; returns all replies after `Run`'s ack.
-fn run_plan(budget: usize) -> (Vec<Reply>, Vec<Vec<f32>>) {
+fn run_plan(budget: usize) -> (Vec<Reply>, Vec<(Vec<f32>, f32)>) {
+    run_plan_with(
+        budget,
+        Command::Run {
+            every: 1,
+            error_change: None,
+        },
+    )
+}
+
+/// [`run_plan`] started by `run`.
+fn run_plan_with(budget: usize, run: Command) -> (Vec<Reply>, Vec<(Vec<f32>, f32)>) {
     let mut node = Node::<2048>::new();
     let mut uart = FakeUart::new(usize::MAX);
     load(&mut uart);
-    uart.send(&Command::Run { every: 1 });
+    uart.send(&run);
     node.poll(&mut uart);
     node.poll(&mut uart);
     let acks = replies(&uart.tx);
@@ -137,16 +151,56 @@ fn a_fast_uart_gets_every_setpoint_bit_for_bit() {
     let (last, setpoints) = replies.split_last().unwrap();
     assert_eq!(setpoints.len(), plan.len());
     for (i, r) in setpoints.iter().enumerate() {
-        let Reply::Setpoint { seq, step, joints } = r else {
+        let Reply::Setpoint {
+            seq,
+            step,
+            joints,
+            time_s,
+            waypoint,
+        } = r
+        else {
             panic!("{r:?}")
         };
-        assert_eq!((*seq, *step), (i as u32, i as u32 + 1));
+        assert_eq!((*seq, *step, *waypoint), (i as u32, i as u32, 0));
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(joints), bits(&plan[i]));
+        assert_eq!(bits(joints), bits(&plan[i].0));
+        assert_eq!(time_s.to_bits(), plan[i].1.to_bits());
     }
     let Reply::Status(s) = last else { panic!() };
     assert_eq!((s.state, s.outcome), (State::Done, Some(Outcome::Reached)));
     assert_eq!((s.setpoints, s.dropped), (plan.len() as u32, 0));
+}
+
+#[test]
+fn the_listing_rule_streams_what_the_host_decimator_picks() {
+    let listing = capp_core::SetpointFilter::LISTING;
+    let (replies, _) = run_plan_with(usize::MAX, capp_proto::run_command(listing));
+    // The host: the same plan through capp-core's decimator.
+    let robot = Robot::<32>::new(&pips::joints()).unwrap();
+    let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
+    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
+    let mut decimator = capp_core::setpoint::Decimator::new(listing);
+    let mut expected = Vec::new();
+    let mut report = *planner.last_report();
+    loop {
+        if decimator.offer(&report) {
+            expected.push((report.step, planner.joints().to_vec()));
+        }
+        if let Phase::Done(_) = report.phase {
+            break;
+        }
+        report = planner.step(&scenario).unwrap();
+    }
+    let received: Vec<(u32, Vec<f32>)> = replies
+        .iter()
+        .filter_map(|r| match r {
+            Reply::Setpoint { step, joints, .. } => Some((*step, joints.to_vec())),
+            _ => None,
+        })
+        .collect();
+    assert!(expected.len() > 3 && expected.len() < report.step as usize / 2);
+    assert_eq!(received, expected);
 }
 
 #[test]
@@ -163,14 +217,17 @@ fn a_slow_uart_shows_gaps_that_the_status_counts() {
     let mut seen = std::vec![false; plan.len()];
     let mut previous = None;
     for r in setpoints {
-        let Reply::Setpoint { seq, step, joints } = r else {
+        let Reply::Setpoint {
+            seq, step, joints, ..
+        } = r
+        else {
             panic!("{r:?}")
         };
         assert!(previous.is_none_or(|p| *seq > p), "in order");
         previous = Some(*seq);
         seen[*seq as usize] = true;
-        assert_eq!(*step, seq + 1);
-        assert_eq!(joints.as_slice(), plan[*seq as usize].as_slice());
+        assert_eq!(*step, *seq);
+        assert_eq!(joints.as_slice(), plan[*seq as usize].0.as_slice());
     }
     let missing = seen.iter().filter(|s| !**s).count() as u32;
     assert_eq!(missing, s.dropped, "every gap is a counted drop");
@@ -189,7 +246,10 @@ fn bad_commands_get_errors_and_change_nothing() {
     let mut node = Node::<2048>::new();
     let mut uart = FakeUart::new(usize::MAX);
     load(&mut uart);
-    uart.send(&Command::Run { every: 1 });
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
     exchange(&mut node, &mut uart);
     while node.status().state == State::Running {
         node.tick(1);
@@ -222,7 +282,10 @@ fn bad_commands_get_errors_and_change_nothing() {
     let mut q = pips::home();
     q[2] = 1000.0;
     uart.send(&Command::Start(Joints::from_slice(&q).unwrap()));
-    uart.send(&Command::Run { every: 1 });
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
     let got = exchange(&mut node, &mut uart);
     let errors: Vec<_> = got
         .iter()
@@ -261,13 +324,19 @@ fn bad_commands_get_errors_and_change_nothing() {
 
     // And the next valid plan runs.
     uart.send(&Command::Start(Joints::from_slice(&pips::home()).unwrap()));
-    uart.send(&Command::Run { every: 1 });
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
     let got = exchange(&mut node, &mut uart);
     assert_eq!(got, [Reply::Ack { command: 7 }, Reply::Ack { command: 8 }]);
     assert_eq!(node.status().state, State::Running);
     // Run while running is refused; Stop acks and sends the final status.
     node.tick(1);
-    uart.send(&Command::Run { every: 1 });
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
     uart.send(&Command::Stop);
     let got = exchange(&mut node, &mut uart);
     let tail: Vec<_> = got

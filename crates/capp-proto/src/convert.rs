@@ -165,3 +165,37 @@ impl From<CoreOutcome> for Outcome {
         }
     }
 }
+
+/// `Run`'s decimation fields for a capp-core setpoint filter.
+pub fn run_command(filter: capp_core::SetpointFilter) -> crate::Command {
+    match filter {
+        capp_core::SetpointFilter::Every(every) => crate::Command::Run {
+            every,
+            error_change: None,
+        },
+        capp_core::SetpointFilter::ErrorChange {
+            position,
+            orientation,
+        } => crate::Command::Run {
+            every: 1,
+            error_change: Some(crate::ErrorChange {
+                position,
+                orientation,
+            }),
+        },
+    }
+}
+
+/// The capp-core setpoint filter `Run`'s fields ask for.
+pub fn setpoint_filter(
+    every: u32,
+    error_change: Option<crate::ErrorChange>,
+) -> capp_core::SetpointFilter {
+    match error_change {
+        Some(c) => capp_core::SetpointFilter::ErrorChange {
+            position: c.position,
+            orientation: c.orientation,
+        },
+        None => capp_core::SetpointFilter::Every(every.max(1)),
+    }
+}

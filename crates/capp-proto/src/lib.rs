@@ -27,6 +27,8 @@ extern crate std;
 pub mod cobs;
 #[cfg(feature = "core")]
 mod convert;
+#[cfg(feature = "core")]
+pub use convert::{run_command, setpoint_filter};
 pub mod crc;
 pub mod frame;
 
@@ -35,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -159,6 +161,18 @@ pub struct Settings {
     pub max_halvings: u8,
 }
 
+/// The listing's setpoint rule (`joints.dat`): a setpoint whenever the
+/// position or orientation error changed by more than these amounts since the
+/// last one (capp-core's `SetpointFilter::ErrorChange`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ErrorChange {
+    /// Position error change, length units (listing: 1.0).
+    pub position: f32,
+    /// Orientation error change (listing: 0.1).
+    pub orientation: f32,
+}
+
 /// A built-in robot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -221,10 +235,13 @@ pub enum Command {
     /// 7: the start configuration (one value per joint).
     Start(Joints),
     /// 8: validate the load and start planning, streaming a setpoint every
-    /// `every` steps (0 is read as 1) plus the last.
+    /// `every` steps (0 is read as 1) plus the first and the last, or, with
+    /// `error_change`, whenever an error changed by more than its threshold.
     Run {
         /// Decimation.
         every: u32,
+        /// The listing's rule instead of `every` (since version 2).
+        error_change: Option<ErrorChange>,
     },
     /// 9: stop a running plan (a final status follows the ack).
     Stop,
@@ -382,6 +399,13 @@ pub enum Reply {
         step: u32,
         /// The joint vector.
         joints: Joints,
+        /// Plan time at this setpoint, seconds: the sum of the step sizes
+        /// taken (varies: fine zone, halvings), so a joint driver knows when
+        /// to be there (since version 2).
+        time_s: f32,
+        /// The waypoint being approached, 0-based (the last one once the plan
+        /// is over) (since version 2).
+        waypoint: u8,
     },
     /// 4: status, on request and at the end of every plan.
     Status(Status),

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 01 00 01, CRC-32 0x898483b3 (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 02 00 01, CRC-32 0x8bc23dea (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x01, 0x06, 0x01, 0xb3, 0x83, 0x84, 0x89, 0x00]
+        &[0x02, 0x02, 0x06, 0x01, 0xea, 0x3d, 0xc2, 0x8b, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x01, 0x01, 0x08, 0x56, 0x0a, 0x43, 0xe9, 0x00]
+        &[0x08, 0x02, 0x01, 0x08, 0x0f, 0xb4, 0x05, 0xeb, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x01, 0x02, 0xff, 0x01, 0xff, 0x07, 0xfc, 0xca, 0xdb, 0x00]
+        &[0x0a, 0x02, 0x02, 0xff, 0x01, 0xff, 0xd7, 0x86, 0x6a, 0x9c, 0x00]
     );
 }
 
@@ -211,7 +211,23 @@ fn every_command_is_pinned() {
         &Command::Start(Joints::from_slice(&[0.5, -1.0]).unwrap()),
         &cat(&[&[0x07, 0x02], &HALF, &MINUS_ONE]),
     );
-    check(&Command::Run { every: 300 }, &[0x08, 0xAC, 0x02]);
+    check(
+        &Command::Run {
+            every: 300,
+            error_change: None,
+        },
+        &[0x08, 0xAC, 0x02, 0x00],
+    );
+    check(
+        &Command::Run {
+            every: 1,
+            error_change: Some(ErrorChange {
+                position: 1.0,
+                orientation: 0.1,
+            }),
+        },
+        &cat(&[&[0x08, 0x01, 0x01], &ONE, &[0xCD, 0xCC, 0xCC, 0x3D]]),
+    );
     check(&Command::Stop, &[0x09]);
     check(&Command::Status, &[0x0A]);
 }
@@ -232,7 +248,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x01, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x02, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -268,8 +284,16 @@ fn every_reply_is_pinned() {
             seq: 128,
             step: 129,
             joints: Joints::from_slice(&[1.0, 0.5]).unwrap(),
+            time_s: 2.0,
+            waypoint: 1,
         },
-        &cat(&[&[0x03, 0x80, 0x01, 0x81, 0x01, 0x02], &ONE, &HALF]),
+        &cat(&[
+            &[0x03, 0x80, 0x01, 0x81, 0x01, 0x02],
+            &ONE,
+            &HALF,
+            &TWO,
+            &[0x01],
+        ]),
     );
     let status = Status {
         state: State::Done,
@@ -333,6 +357,8 @@ fn the_largest_messages_fit_a_frame() {
         seq: u32::MAX,
         step: u32::MAX,
         joints: full.clone(),
+        time_s: f32::MAX,
+        waypoint: u8::MAX,
     };
     let n = encode(&m, &mut f).unwrap();
     assert!(n <= MAX_FRAME);
@@ -359,17 +385,24 @@ fn raw_frame(body: &[u8]) -> Vec<u8> {
 #[test]
 fn bad_frames_are_reported_not_decoded() {
     let mut f = [0u8; MAX_FRAME];
-    let n = encode(&Command::Run { every: 1 }, &mut f).unwrap();
+    let n = encode(
+        &Command::Run {
+            every: 1,
+            error_change: None,
+        },
+        &mut f,
+    )
+    .unwrap();
     // CRC: flip a bit of the CRC (a non-code byte).
     let mut bad = f;
     bad[n - 2] ^= 0x01;
     assert_eq!(decode::<Command>(&mut bad[..n - 1]), Err(FrameError::Crc));
     // Version.
-    let mut v2 = raw_frame(&[2, 0x08, 0x01]);
-    let l = v2.len() - 1;
+    let mut v1 = raw_frame(&[1, 0x08, 0x01, 0x00]);
+    let l = v1.len() - 1;
     assert_eq!(
-        decode::<Command>(&mut v2[..l]),
-        Err(FrameError::Version { got: 2 })
+        decode::<Command>(&mut v1[..l]),
+        Err(FrameError::Version { got: 1 })
     );
     // Unknown variant, trailing bytes, truncated payload.
     for body in [&[VERSION, 11][..], &[VERSION, 9, 0], &[VERSION, 8]] {
@@ -404,7 +437,10 @@ fn sample_commands() -> Vec<Command> {
         Command::Preset(Preset::Pips),
         Command::Clear(Part::Obstacles),
         Command::Start(Joints::from_slice(&[0.0; 32]).unwrap()),
-        Command::Run { every: 10 },
+        Command::Run {
+            every: 10,
+            error_change: None,
+        },
         Command::Stop,
         Command::Status,
     ];

@@ -12,7 +12,7 @@ use capp_core::setpoint::Decimator;
 use capp_core::{
     pips, Mission, Phase, Planner, Robot, Scenario, SetpointFilter, Settings, Waypoint,
 };
-use capp_link::qemu::{default_elf, qemu_available, Qemu};
+use capp_link::qemu::Qemu;
 use capp_link::{LinkError, Upload};
 use capp_proto::{Command, ErrorCode, Outcome, Reply, State, NO_COMMAND};
 
@@ -36,7 +36,8 @@ fn target() -> Waypoint {
     Waypoint::pose([p.x, p.y, p.z], rows)
 }
 
-/// The host's plan: (step, joints) of every setpoint for decimation `every`.
+/// The host's plan: (step, joints) of every setpoint for decimation `every`,
+/// the start included.
 fn host_plan(
     waypoints: &[Waypoint],
     settings: Settings,
@@ -48,14 +49,15 @@ fn host_plan(
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut decimator = Decimator::new(SetpointFilter::Every(every));
     let mut out = Vec::new();
+    let mut report = *planner.last_report();
     loop {
-        let report = planner.step(&scenario).unwrap();
         if decimator.offer(&report) {
             out.push((report.step, planner.joints().to_vec()));
         }
         if let Phase::Done(o) = report.phase {
             return (out, o.into());
         }
+        report = planner.step(&scenario).unwrap();
     }
 }
 
@@ -65,24 +67,9 @@ fn bits(v: &[f32]) -> Vec<u32> {
 
 #[test]
 fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
-    let elf = default_elf();
-    // scripts/firmware.sh sets CAPP_REQUIRE_QEMU=1: there, a skip is a failure.
-    let required = std::env::var_os("CAPP_REQUIRE_QEMU").is_some();
-    let missing = if !qemu_available() {
-        Some("qemu-system-arm is not installed (apt-get install qemu-system-arm)".to_string())
-    } else if !elf.exists() {
-        Some(format!(
-            "firmware ELF {} is missing (cd firmware && cargo build --release)",
-            elf.display()
-        ))
-    } else {
-        None
-    };
-    if let Some(why) = missing {
-        assert!(!required, "CAPP_REQUIRE_QEMU is set but {why}");
-        eprintln!("SKIPPED: {why}");
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
         return;
-    }
+    };
     let log = std::env::temp_dir().join(format!("capp-qemu-{}.defmt", std::process::id()));
     let (_qemu, mut link) = Qemu::launch(&elf, Some(&log)).expect("boot QEMU");
     link.timeout = Duration::from_secs(10);
@@ -103,7 +90,7 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
     assert_eq!(outcome, Outcome::Reached, "the host plan reaches the pose");
 
     link.upload(&upload).unwrap();
-    link.run(1).unwrap();
+    link.run(SetpointFilter::Every(1)).unwrap();
     let record = link.receive_plan(Duration::from_secs(30)).unwrap();
     eprintln!(
         "plan: {} setpoints, status {:?}, frame errors {:?}",
@@ -167,7 +154,10 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
         .unwrap();
     expect_refused(
         &mut link,
-        &Command::Run { every: 1 },
+        &Command::Run {
+            every: 1,
+            error_change: None,
+        },
         ErrorCode::InvalidRobot,
     );
     // The previous plan's status is kept.
@@ -178,7 +168,7 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
 
     // A valid plan still runs, decimated this time.
     link.upload(&upload).unwrap();
-    link.run(10).unwrap();
+    link.run(SetpointFilter::Every(10)).unwrap();
     let record = link.receive_plan(Duration::from_secs(30)).unwrap();
     let (expected, _) = host_plan(&waypoints, settings, 10);
     assert!(record.missing.is_empty());
