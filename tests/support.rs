@@ -7,6 +7,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod fault_proxy;
+
 use std::path::PathBuf;
 
 use capp_link::qemu::{default_elf, qemu_available};

@@ -41,6 +41,15 @@ impl Qemu {
     /// before it starts the CPU, so no byte is lost. Semihosting output (the
     /// defmt log) goes to `log` if given, else is discarded.
     pub fn launch(elf: &Path, log: Option<&Path>) -> Result<(Qemu, Link<TcpStream>), LinkError> {
+        let (qemu, stream) = Qemu::boot(elf, log)?;
+        stream.set_read_timeout(Some(Duration::from_millis(50)))?;
+        stream.set_nodelay(true)?;
+        Ok((qemu, Link::new(stream)))
+    }
+
+    /// [`Qemu::launch`], returning the raw connection to the UART (for a
+    /// proxy, say) instead of a [`Link`].
+    pub fn boot(elf: &Path, log: Option<&Path>) -> Result<(Qemu, TcpStream), LinkError> {
         let port = {
             let l = TcpListener::bind("127.0.0.1:0")?;
             l.local_addr()?.port()
@@ -63,8 +72,8 @@ impl Qemu {
         let mut qemu = Qemu { child, port };
         let deadline = Instant::now() + Duration::from_secs(20);
         loop {
-            match crate::connect_tcp(("127.0.0.1", port)) {
-                Ok(link) => return Ok((qemu, link)),
+            match TcpStream::connect(("127.0.0.1", port)) {
+                Ok(stream) => return Ok((qemu, stream)),
                 Err(e) => {
                     if let Ok(Some(status)) = qemu.child.try_wait() {
                         return Err(LinkError::Io(std::io::Error::other(format!(
@@ -72,7 +81,7 @@ impl Qemu {
                         ))));
                     }
                     if Instant::now() > deadline {
-                        return Err(e);
+                        return Err(e.into());
                     }
                     std::thread::sleep(Duration::from_millis(50));
                 }
