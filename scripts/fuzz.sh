@@ -29,6 +29,8 @@ host="$(rustc -vV | sed -n 's/^host: //p')"
 export RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
 -Cllvm-args=-sanitizer-coverage-inline-8bit-counters -Cllvm-args=-sanitizer-coverage-pc-table \
 -Cllvm-args=-sanitizer-coverage-trace-compares --cfg fuzzing -Cdebug-assertions -Coverflow-checks"
+printf '\n== fuzz: format\n'
+cargo fmt --check
 printf '\n== fuzz: build %s\n' "${targets[*]}"
 bins=()
 for t in "${targets[@]}"; do bins+=(--bin "$t"); done

@@ -25,6 +25,7 @@ if [ "${1:-}" = "--list" ]; then
 fi
 
 printf '\n== no panic path in the planner, the protocol and the board logic (link check)\n'
+cargo fmt --check
 if ! cargo build --release --locked 2>build.log; then
   grep -E "undefined symbol|error" build.log | head -20
   echo "nopanic: a panic path survived; run scripts/nopanic.sh --list to see where" >&2

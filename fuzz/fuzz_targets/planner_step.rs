@@ -130,7 +130,11 @@ fn settings(f: &FuzzSettings) -> Settings {
     s.fine_step_fraction = f.fine_step_fraction.positive(1.0);
     s.position_tolerance = f.position_tolerance.positive(1.0);
     s.orientation_tolerance = f.orientation_tolerance.positive(1.0);
-    s.law.kind = if f.paper { LawKind::Paper } else { LawKind::Gradient };
+    s.law.kind = if f.paper {
+        LawKind::Paper
+    } else {
+        LawKind::Gradient
+    };
     s.law.orientation_scale = f.orientation_scale.positive(20.0);
     s.law.approach_radius = f.approach_radius.positive(5.0);
     s.avoidance.joint_margin = f.joint_margin.positive(5.0);

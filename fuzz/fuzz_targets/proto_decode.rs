@@ -25,12 +25,19 @@ where
         return;
     };
     assert_eq!(first[n - 1], 0, "a frame ends with its delimiter");
-    assert!(first[..n - 1].iter().all(|&b| b != 0), "no zero inside a frame");
+    assert!(
+        first[..n - 1].iter().all(|&b| b != 0),
+        "no zero inside a frame"
+    );
     let mut copy = first;
     let again: T = decode(&mut copy[..n - 1]).expect("an encoded message decodes");
     let mut second = [0u8; MAX_FRAME];
     let m = encode(&again, &mut second).expect("it encoded once");
-    assert_eq!(&first[..n], &second[..m], "encode -> decode -> encode changed the bytes");
+    assert_eq!(
+        &first[..n],
+        &second[..m],
+        "encode -> decode -> encode changed the bytes"
+    );
 }
 
 fn check_frame(frame: &[u8]) {

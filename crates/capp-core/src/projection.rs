@@ -67,7 +67,12 @@ pub fn project<const N: usize>(
     // A rate into a limit the joint already sits at will be clamped away by the
     // integrator: drop it now, so the projection sees the motion that happens.
     // (Zipped iterators rather than indices: no bounds checks, no panic path.)
-    for (((joint, &qj), r), l) in joints.iter().zip(q).zip(rate.iter_mut()).zip(locked.iter_mut()) {
+    for (((joint, &qj), r), l) in joints
+        .iter()
+        .zip(q)
+        .zip(rate.iter_mut())
+        .zip(locked.iter_mut())
+    {
         *l = blocked(joint.min, joint.max, qj, *r);
         if *l {
             *r = 0.0;

@@ -58,7 +58,11 @@ fn run(sc: &Sc, start: &[f32]) -> (Outcome, u32, Vec<f32>) {
             }
         })
         .unwrap();
-    (outcome, planner.last_report().step, planner.joints().to_vec())
+    (
+        outcome,
+        planner.last_report().step,
+        planner.joints().to_vec(),
+    )
 }
 
 /// Three 10 in links turning about z: a planar arm.
@@ -184,7 +188,7 @@ fn coincident_avoidance_points_give_finite_gradients() {
     let joints = [
         Joint::revolute(0.0, 10.0, 0.0, -2.8, 2.8, 0.5),
         Joint::revolute(0.0, 0.0, 0.0, -2.8, 2.8, 0.5),
-        Joint::revolute(1.5708, 0.0, 0.0, -2.8, 2.8, 0.5),
+        Joint::revolute(std::f32::consts::FRAC_PI_2, 0.0, 0.0, -2.8, 2.8, 0.5),
         Joint::revolute(0.0, 10.0, 0.0, -2.8, 2.8, 0.5),
         Joint::prismatic(0.0, 0.0, 0.0, 0.0, 5.0, 1.0),
         Joint::revolute(0.0, 5.0, 0.0, -2.8, 2.8, 0.5),
@@ -287,7 +291,10 @@ fn metres_and_inches_give_the_same_outcome() {
     // length, so a chain mixing both kinds shares its motion differently in
     // another unit (PIPS: 536 steps in inches, 757 in metres). A chain of one
     // kind is scale-invariant (`tiny_and_huge_scales_stay_finite`).
-    assert!(steps_in.abs_diff(steps_m) < steps_in, "{steps_in} vs {steps_m}");
+    assert!(
+        steps_in.abs_diff(steps_m) < steps_in,
+        "{steps_in} vs {steps_m}"
+    );
     // Margins are lengths: the inch margins read as metres make an unrelated
     // (and here impossible) problem, refused at the start, not a NaN.
     let (_, start_m) = pips_scaled(1.0 / 39.37);
@@ -296,12 +303,20 @@ fn metres_and_inches_give_the_same_outcome() {
     let mut s = *bad.settings();
     s.avoidance = AvoidanceSettings::default();
     let obstacles: Vec<SuperEllipsoid> = bad.obstacles().iter().map(|o| *o.source()).collect();
-    bad = Sc::new(robot, &obstacles, &Mission::new(bad.waypoints(), s).unwrap()).unwrap();
+    bad = Sc::new(
+        robot,
+        &obstacles,
+        &Mission::new(bad.waypoints(), s).unwrap(),
+    )
+    .unwrap();
     match Planner::new(&bad, &start_m) {
         Err(StartError::InObstacle { .. }) => {}
         Ok(_) => {
             let (outcome, _, _) = run(&bad, &start_m);
-            assert!(matches!(outcome, Outcome::Reached | Outcome::Stalled | Outcome::Capped));
+            assert!(matches!(
+                outcome,
+                Outcome::Reached | Outcome::Stalled | Outcome::Capped
+            ));
         }
         Err(e) => panic!("{e}"),
     }
@@ -322,8 +337,14 @@ fn tiny_and_huge_scales_stay_finite() {
         s.avoidance.joint_margin = 1.0 * k;
         s.avoidance.link_margin = 0.5 * k;
         s.avoidance.influence_distance = 5.0 * k;
-        let post = SuperEllipsoid::aligned([22.0 * k, 8.0 * k, 0.0], [1.0 * k, 1.0 * k, 50.0 * k], 2.0);
-        let sc = scenario(&joints, &[post], &[Waypoint::at([15.0 * k, 15.0 * k, 0.0])], s);
+        let post =
+            SuperEllipsoid::aligned([22.0 * k, 8.0 * k, 0.0], [1.0 * k, 1.0 * k, 50.0 * k], 2.0);
+        let sc = scenario(
+            &joints,
+            &[post],
+            &[Waypoint::at([15.0 * k, 15.0 * k, 0.0])],
+            s,
+        );
         run(&sc, &[0.0, 0.3, 0.3])
     };
     let (outcome, steps, _) = case(1.0);
@@ -331,6 +352,9 @@ fn tiny_and_huge_scales_stay_finite() {
     for k in [1e-3f32, 1.0 / 39.37, 1e2] {
         let (o, n, _) = case(k);
         assert_eq!(o, outcome, "scale {k}");
-        assert!(n.abs_diff(steps) * 20 <= steps, "scale {k}: {n} steps, {steps} in inches");
+        assert!(
+            n.abs_diff(steps) * 20 <= steps,
+            "scale {k}: {n} steps, {steps} in inches"
+        );
     }
 }

@@ -264,7 +264,10 @@ fn fractions() -> impl Strategy<Value = Vec<f32>> {
     prop::collection::vec(-0.95f32..0.95, 32)
 }
 
-fn case(joint_count: std::ops::RangeInclusive<usize>, max_steps: u32) -> impl Strategy<Value = Case> {
+fn case(
+    joint_count: std::ops::RangeInclusive<usize>,
+    max_steps: u32,
+) -> impl Strategy<Value = Case> {
     (
         prop::collection::vec(joint_spec(), joint_count),
         fractions(),
@@ -274,15 +277,17 @@ fn case(joint_count: std::ops::RangeInclusive<usize>, max_steps: u32) -> impl St
         prop::collection::vec(obstacle_spec(), 0..=6),
         settings_spec(max_steps),
     )
-        .prop_map(|(joints, start, goal, via, target, obstacles, settings)| Case {
-            joints,
-            start,
-            goal,
-            via,
-            target,
-            obstacles,
-            settings,
-        })
+        .prop_map(
+            |(joints, start, goal, via, target, obstacles, settings)| Case {
+                joints,
+                start,
+                goal,
+                via,
+                target,
+                obstacles,
+                settings,
+            },
+        )
 }
 
 fn config_at(joints: &[Joint], fractions: &[f32]) -> Vec<f32> {
@@ -313,7 +318,10 @@ fn build(joints: &[Joint], case: &Case) -> (Sc, Vec<f32>) {
         .map(|o| {
             let k = 1 + ((o.link * joints.len() as f32) as usize).min(joints.len() - 1);
             let (a, b) = (start_chain.origins[k], goal_chain.origins[k]);
-            let centre = add(add(a, scale(sub(b, a), o.along as f64)), o.offset.map(|x| x as f64));
+            let centre = add(
+                add(a, scale(sub(b, a), o.along as f64)),
+                o.offset.map(|x| x as f64),
+            );
             SuperEllipsoid {
                 centre: centre.map(|x| x as f32),
                 semi_axes: o.semi_axes,
@@ -505,7 +513,8 @@ fn random_chains_keep_every_invariant_at_every_step() {
     println!("random chains: {tally:?}");
     // The cases must exercise every ending and obstacles (over the full default count).
     if std::env::var("PROPERTY_CASES").is_err() {
-        let (reached, stalled, capped) = (tally.reached.get(), tally.stalled.get(), tally.capped.get());
+        let (reached, stalled, capped) =
+            (tally.reached.get(), tally.stalled.get(), tally.capped.get());
         assert!(reached > 50 && stalled > 50 && capped > 50, "{tally:?}");
         assert!(tally.with_obstacles.get() > CASES / 2, "{tally:?}");
     }
