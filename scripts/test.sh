@@ -18,6 +18,12 @@ cargo clippy --workspace --all-targets -- -D warnings
 step "host tests"
 cargo test --workspace
 
+step "no panic path in the firmware's planner, protocol and board code (link check)"
+bash scripts/nopanic.sh
+
+step "fuzzing: every target for a bounded time (FUZZ_SECONDS, default 20 s each)"
+bash scripts/fuzz.sh
+
 step "capp-core builds for Cortex-M4F and Cortex-M0+ (no_std, with and without defmt)"
 cargo build -p capp-core --target thumbv7em-none-eabihf
 cargo build -p capp-core --target thumbv6m-none-eabi --features defmt

@@ -199,9 +199,10 @@ pub fn potential_gradient<const N: usize>(
             sliding_force += f * point.t;
         }
         let z = frames.axis(j);
-        mu[j] = match robot.joints()[j].kind {
-            JointKind::Revolute => z.dot(&moment),
-            JointKind::Prismatic => z.dot(&(beyond + sliding_force)),
+        // `get`, not `[j]`: no panic path (the frames are the robot's, so it is always `Some`).
+        mu[j] = match robot.joints().get(j).map(|joint| joint.kind) {
+            Some(JointKind::Prismatic) => z.dot(&(beyond + sliding_force)),
+            _ => z.dot(&moment),
         };
     }
     field

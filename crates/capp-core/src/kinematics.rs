@@ -60,7 +60,8 @@ impl<const N: usize> Frames<N> {
     /// Origin of the frame after joint `j` (`o_{j+1}`), length units.
     #[inline]
     pub fn origin(&self, j: usize) -> Vec3 {
-        self.origin[j]
+        // `get`: no panic path; every caller passes `j < len()`.
+        self.origin.get(j).copied().unwrap_or_else(Vec3::zeros)
     }
 
     /// Origins `o_1 .. o_n`.
@@ -75,23 +76,22 @@ impl<const N: usize> Frames<N> {
         if j == 0 {
             Vec3::zeros()
         } else {
-            self.origin[j - 1]
+            self.origin(j - 1)
         }
     }
 
     /// Unit axis `z_j` joint `j` turns about or slides along.
     #[inline]
     pub fn axis(&self, j: usize) -> Vec3 {
-        self.axis[j]
+        self.axis.get(j).copied().unwrap_or_else(Vec3::z)
     }
 
     /// End-effector position `r_n4`.
     #[inline]
     pub fn end_position(&self) -> Vec3 {
-        if self.n == 0 {
-            Vec3::zeros()
-        } else {
-            self.origin[self.n - 1]
+        match self.n.checked_sub(1).and_then(|last| self.origin.get(last)) {
+            Some(&o) => o,
+            None => Vec3::zeros(),
         }
     }
 

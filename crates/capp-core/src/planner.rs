@@ -272,7 +272,10 @@ impl<const N: usize> Planner<N> {
                 halvings: 0,
             },
         };
-        let target = scenario.targets()[0];
+        // Scenario::new refuses a mission without waypoints, so this never fails.
+        let Some(&target) = scenario.targets().first() else {
+            return Err(StartError::ScenarioMismatch);
+        };
         planner.now.evaluate(scenario, &planner.q[..n], &target);
         if !planner.now.field.clear {
             let c = planner.now.field.clearance.unwrap_or(Clearance {
@@ -292,12 +295,12 @@ impl<const N: usize> Planner<N> {
 
     /// The current joint vector (`n` values: radians or length units).
     pub fn joints(&self) -> &[f32] {
-        &self.q[..self.n]
+        &self.q[..self.n.min(N)]
     }
 
     /// The joint rate of the last step (per second), after projection and limits.
     pub fn rates(&self) -> &[f32] {
-        &self.rate[..self.n]
+        &self.rate[..self.n.min(N)]
     }
 
     /// Frames of the current configuration.
@@ -307,7 +310,7 @@ impl<const N: usize> Planner<N> {
 
     /// Current obstacle gradient `mu = dP/dq` (eq. 20).
     pub fn obstacle_gradient(&self) -> &[f32] {
-        &self.now.mu[..self.n]
+        &self.now.mu[..self.n.min(N)]
     }
 
     /// Current phase.
@@ -379,7 +382,8 @@ impl<const N: usize> Planner<N> {
         if robot.len() != self.n {
             return Err(StartError::ScenarioMismatch);
         }
-        let n = self.n;
+        // self.n <= N always; the `min` lets the optimiser drop the bounds checks.
+        let n = self.n.min(N);
         let settings = *scenario.settings();
         self.pass_waypoints(scenario);
         let waypoint = match self.phase {

@@ -62,14 +62,20 @@ pub fn project<const N: usize>(
         return false;
     }
     let n = robot.len();
-    let joints = robot.joints();
+    let joints = &robot.joints()[..n];
     let (q, mu, rate, locked) = (&q[..n], &mu[..n], &mut rate[..n], &mut locked[..n]);
     // A rate into a limit the joint already sits at will be clamped away by the
     // integrator: drop it now, so the projection sees the motion that happens.
-    for (j, joint) in joints.iter().enumerate() {
-        locked[j] = blocked(joint.min, joint.max, q[j], rate[j]);
-        if locked[j] {
-            rate[j] = 0.0;
+    // (Zipped iterators rather than indices: no bounds checks, no panic path.)
+    for (((joint, &qj), r), l) in joints
+        .iter()
+        .zip(q)
+        .zip(rate.iter_mut())
+        .zip(locked.iter_mut())
+    {
+        *l = blocked(joint.min, joint.max, qj, *r);
+        if *l {
+            *r = 0.0;
         }
     }
     // Two passes: a free joint at a limit that the first correction would push
@@ -87,18 +93,23 @@ pub fn project<const N: usize>(
         }
         let k = strength.min(1.0) * approach / size_sq;
         let mut newly_locked = false;
-        for (j, joint) in joints.iter().enumerate() {
-            if !locked[j] && blocked(joint.min, joint.max, q[j], rate[j] - k * mu[j]) {
-                locked[j] = true;
+        for (((joint, &qj), (&r, &m)), l) in joints
+            .iter()
+            .zip(q)
+            .zip(rate.iter().zip(mu))
+            .zip(locked.iter_mut())
+        {
+            if !*l && blocked(joint.min, joint.max, qj, r - k * m) {
+                *l = true;
                 newly_locked = true;
             }
         }
         if newly_locked && pass == 0 {
             continue;
         }
-        for j in 0..n {
-            if !locked[j] {
-                rate[j] -= k * mu[j];
+        for ((r, &m), &l) in rate.iter_mut().zip(mu).zip(locked.iter()) {
+            if !l {
+                *r -= k * m;
             }
         }
         return true;

@@ -314,7 +314,9 @@ impl<const N: usize> Robot<N> {
     /// Number of joints `n`.
     #[inline]
     pub fn len(&self) -> usize {
-        self.joints.len()
+        // Never above N (a heapless::Vec<_, N>); the `min` tells the optimiser,
+        // so slicing `[_; N]` buffers by it cannot panic.
+        self.joints.len().min(N)
     }
 
     /// Always false: a validated robot has at least one joint.
@@ -331,7 +333,7 @@ impl<const N: usize> Robot<N> {
 
     #[inline]
     pub(crate) fn links(&self) -> &[LinkConstants] {
-        &self.links[..self.joints.len()]
+        &self.links[..self.len()]
     }
 
     /// The first joint whose value in `q` is outside its limits, or not finite.

@@ -433,7 +433,7 @@ impl<const TXQ: usize> Node<TXQ> {
         let mut frame = [0u8; MAX_FRAME];
         let sent = match capp_proto::encode(&setpoint, &mut frame) {
             Ok(n) if TXQ - self.tx.len() >= n + RESERVE => {
-                for &b in &frame[..n] {
+                for &b in frame.iter().take(n) {
                     let _ = self.tx.push_back(b);
                 }
                 true
@@ -454,7 +454,7 @@ impl<const TXQ: usize> Node<TXQ> {
         let mut frame = [0u8; MAX_FRAME];
         if let Ok(n) = capp_proto::encode(&Reply::Status(self.status), &mut frame) {
             if TXQ - self.tx.len() >= n {
-                for &b in &frame[..n] {
+                for &b in frame.iter().take(n) {
                     let _ = self.tx.push_back(b);
                 }
                 self.final_pending = false;
@@ -466,7 +466,7 @@ impl<const TXQ: usize> Node<TXQ> {
         let mut frame = [0u8; MAX_FRAME];
         if let Ok(n) = capp_proto::encode(reply, &mut frame) {
             // Fits: bytes are read only while RESERVE is free (see `poll`).
-            for &b in &frame[..n] {
+            for &b in frame.iter().take(n) {
                 let _ = self.tx.push_back(b);
             }
         }

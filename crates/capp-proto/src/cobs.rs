@@ -22,33 +22,41 @@ pub enum CobsError {
     Malformed,
 }
 
+/// Writes `byte` at `at`, or fails with `error`: no indexing, so no panic path
+/// (the callers' length checks make the error unreachable).
+fn put(buf: &mut [u8], at: usize, byte: u8, error: CobsError) -> Result<(), CobsError> {
+    *buf.get_mut(at).ok_or(error)? = byte;
+    Ok(())
+}
+
 /// Encodes `input` into `output`; returns the encoded length.
 pub fn encode(input: &[u8], output: &mut [u8]) -> Result<usize, CobsError> {
     if output.len() < max_encoded_len(input.len()) {
         return Err(CobsError::OutputFull);
     }
+    let full = CobsError::OutputFull;
     let mut code_at = 0;
     let mut out = 1;
     let mut code: u8 = 1;
     for &b in input {
         if b == 0 {
-            output[code_at] = code;
+            put(output, code_at, code, full)?;
             code_at = out;
             out += 1;
             code = 1;
         } else {
-            output[out] = b;
+            put(output, out, b, full)?;
             out += 1;
             code += 1;
             if code == 0xFF {
-                output[code_at] = code;
+                put(output, code_at, code, full)?;
                 code_at = out;
                 out += 1;
                 code = 1;
             }
         }
     }
-    output[code_at] = code;
+    put(output, code_at, code, full)?;
     Ok(out)
 }
 
@@ -67,16 +75,16 @@ pub fn decode_in_place(buf: &mut [u8]) -> Result<usize, CobsError> {
             return Err(CobsError::Malformed);
         }
         for i in 0..run {
-            let b = buf[read + i];
+            let b = buf.get(read + i).copied().unwrap_or(0);
             if b == 0 {
                 return Err(CobsError::Malformed);
             }
-            buf[write] = b;
+            put(buf, write, b, CobsError::Malformed)?;
             write += 1;
         }
         read += run;
         if code != 0xFF && read < buf.len() {
-            buf[write] = 0;
+            put(buf, write, 0, CobsError::Malformed)?;
             write += 1;
         }
     }

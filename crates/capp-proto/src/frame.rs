@@ -63,10 +63,15 @@ pub fn encode<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, FrameE
     let n = postcard::to_slice(message, &mut body[1..MAX_BODY - 4])
         .map_err(|_| FrameError::TooLong)?
         .len();
-    let crc = crc32(&body[..1 + n]);
-    body[1 + n..1 + n + 4].copy_from_slice(&crc.to_le_bytes());
+    // `get` instead of indexing: postcard wrote at most MAX_BODY - 5 bytes, so
+    // these never fail, and no panic path is left for the optimiser to keep.
+    let crc = crc32(body.get(..1 + n).ok_or(FrameError::TooLong)?);
+    body.get_mut(1 + n..1 + n + 4)
+        .ok_or(FrameError::TooLong)?
+        .copy_from_slice(&crc.to_le_bytes());
     let len = 1 + n + 4;
-    let m = cobs::encode(&body[..len], out).map_err(|_| FrameError::TooLong)?;
+    let body = body.get(..len).ok_or(FrameError::TooLong)?;
+    let m = cobs::encode(body, out).map_err(|_| FrameError::TooLong)?;
     if m >= out.len() || m + 1 > MAX_FRAME {
         return Err(FrameError::TooLong);
     }
@@ -81,7 +86,7 @@ pub fn decode<T: DeserializeOwned>(frame: &mut [u8]) -> Result<T, FrameError> {
     if n < 5 {
         return Err(FrameError::Cobs);
     }
-    let body = &frame[..n];
+    let body = frame.get(..n).ok_or(FrameError::Cobs)?;
     let (data, crc) = body.split_at(n - 4);
     let crc = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
     if crc32(data) != crc {
@@ -145,18 +150,25 @@ impl<const N: usize> Accumulator<N> {
             if len == 0 {
                 return Feed::Consumed;
             }
-            return Feed::Frame(&mut self.buf[..len]);
+            return match self.buf.get_mut(..len) {
+                Some(frame) => Feed::Frame(frame),
+                None => Feed::Overfull,
+            };
         }
         if self.overfull {
             return Feed::Consumed;
         }
-        if self.len == N {
-            self.overfull = true;
-            self.len = 0;
-            return Feed::Consumed;
+        // `len <= N` always: a full buffer (no slot at `len`) overflows.
+        match self.buf.get_mut(self.len) {
+            Some(slot) => {
+                *slot = byte;
+                self.len += 1;
+            }
+            None => {
+                self.overfull = true;
+                self.len = 0;
+            }
         }
-        self.buf[self.len] = byte;
-        self.len += 1;
         Feed::Consumed
     }
 
