@@ -18,12 +18,8 @@ use capp_link::qemu::Qemu;
 use capp_link::LinkError;
 use capp_proto::NO_COMMAND;
 use capp_sim::Problem;
+use capp_system_tests::capp;
 use capp_system_tests::fault_proxy::{FaultProxy, Faults};
-
-/// `capp ARGS...` in process, exactly as the binary runs it.
-fn capp(args: &[&str]) -> ExitCode {
-    capp_sim::cli::main(std::iter::once("capp").chain(args.iter().copied()))
-}
 
 /// Setpoint rows of a `setpoints.csv` by step, without the columns a board
 /// does not send (`h_s`, `constrained`, `halvings`).

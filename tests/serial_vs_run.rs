@@ -8,17 +8,13 @@
 //! missing, damaged or rejected).
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
+
+use capp_system_tests::capp;
 
 fn scenario(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../host-sim/scenarios")
         .join(name)
-}
-
-/// `capp ARGS...` in process, exactly as the binary runs it.
-fn capp(args: &[&str]) -> ExitCode {
-    capp_sim::cli::main(std::iter::once("capp").chain(args.iter().copied()))
 }
 
 fn csv(path: &Path) -> Vec<Vec<String>> {

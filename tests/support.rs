@@ -10,8 +10,14 @@
 pub mod fault_proxy;
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 use capp_link::qemu::{default_elf, qemu_available};
+
+/// `capp ARGS...` in process, exactly as the binary runs it.
+pub fn capp(args: &[&str]) -> ExitCode {
+    capp_sim::cli::main(std::iter::once("capp").chain(args.iter().copied()))
+}
 
 /// The firmware ELF to boot, or `None` (after saying why) if the test is to
 /// be skipped. Panics if a skip is not allowed.
