@@ -94,7 +94,15 @@ fn spin(iterations: u32) {
 }
 
 fn line(scene: &str, joints: usize, obstacles: usize, what: &str, tenths: u64) {
-    hprintln!("M4F {} {} {} {} {}.{}", scene, joints, obstacles, what, tenths / 10, tenths % 10);
+    hprintln!(
+        "M4F {} {} {} {} {}.{}",
+        scene,
+        joints,
+        obstacles,
+        what,
+        tenths / 10,
+        tenths % 10
+    );
 }
 
 fn stack_pointer() -> usize {
@@ -151,33 +159,69 @@ fn measure<const N: usize>(
     );
     line(name, n, m, "step", step);
     line(name, n, m, "step_max", step_max * 10);
+    let mut phases = PhaseBench::new(sc, &snapshot);
+    line(
+        name,
+        n,
+        m,
+        "active_pairs",
+        phases.active_pairs() as u64 * 10,
+    );
     if with_phases {
-        let mut phases = PhaseBench::new(sc, &snapshot);
-        line(name, n, m, "active_pairs", phases.active_pairs() as u64 * 10);
-        let (k, _) = count(REPS, overhead, &mut phases, |_| {}, |b| {
-            black_box(b.kinematics(sc));
-        });
+        let (k, _) = count(
+            REPS,
+            overhead,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.kinematics(sc));
+            },
+        );
         line(name, n, m, "kinematics", k);
-        let (c, _) = count(REPS, overhead, &mut phases, |_| {}, |b| {
-            black_box(b.control_law(sc));
-        });
+        let (c, _) = count(
+            REPS,
+            overhead,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.control_law(sc));
+            },
+        );
         line(name, n, m, "control_law", c);
-        let (o, _) = count(REPS, overhead, &mut phases, |_| {}, |b| {
-            black_box(b.obstacles(sc));
-        });
+        let (o, _) = count(
+            REPS,
+            overhead,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.obstacles(sc));
+            },
+        );
         line(name, n, m, "obstacles", o);
-        let (p, _) = count(REPS, overhead, &mut phases, |_| {}, |b| {
-            black_box(b.projection_integration(sc));
-        });
+        let (p, _) = count(
+            REPS,
+            overhead,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.projection_integration(sc));
+            },
+        );
         line(name, n, m, "projection_integration", p);
         // A run of consecutive steps: the mean and the worst along the path.
         planner.clone_from(&snapshot);
         let mut halvings = 0u64;
-        let (mean, max) = count(WINDOW, overhead, &mut planner, |_| {}, |p| {
-            if let Ok(r) = p.step(sc) {
-                halvings += r.halvings as u64;
-            }
-        });
+        let (mean, max) = count(
+            WINDOW,
+            overhead,
+            &mut planner,
+            |_| {},
+            |p| {
+                if let Ok(r) = p.step(sc) {
+                    halvings += r.halvings as u64;
+                }
+            },
+        );
         line(name, n, m, "window_mean", mean);
         line(name, n, m, "window_max", max * 10);
         line(name, n, m, "window_halvings", halvings * 10);
@@ -187,9 +231,15 @@ fn measure<const N: usize>(
     }
     if listing_reps > 0 {
         let mut listing = Listing::<N>::new(snapshot.joints());
-        let (l, _) = count(listing_reps, overhead, &mut listing, |_| {}, |l| {
-            black_box(l.step(sc));
-        });
+        let (l, _) = count(
+            listing_reps,
+            overhead,
+            &mut listing,
+            |_| {},
+            |l| {
+                black_box(l.step(sc));
+            },
+        );
         line(name, n, m, "listing_step", l);
     }
 }
@@ -204,9 +254,16 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
     for point in capp_core::avoidance::points(planner.frames(), avoidance) {
         for obstacle in sc.obstacles() {
             let mut hit = false;
-            let (c, _) = count(4, overhead, &mut hit, |_| {}, |h| {
-                *h = black_box(obstacle.contact(black_box(&point.position), point.kind)).is_some();
-            });
+            let (c, _) = count(
+                4,
+                overhead,
+                &mut hit,
+                |_| {},
+                |h| {
+                    *h = black_box(obstacle.contact(black_box(&point.position), point.kind))
+                        .is_some();
+                },
+            );
             if hit {
                 active += c;
                 active_n += 1;
@@ -216,11 +273,11 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
             }
         }
     }
-    if active_n > 0 {
-        line(name, n, m, "contact_within_influence", active / active_n);
+    if let Some(mean) = active.checked_div(active_n) {
+        line(name, n, m, "contact_within_influence", mean);
     }
-    if idle_n > 0 {
-        line(name, n, m, "contact_outside_influence", idle / idle_n);
+    if let Some(mean) = idle.checked_div(idle_n) {
+        line(name, n, m, "contact_outside_influence", mean);
     }
 }
 
@@ -236,12 +293,34 @@ fn main() -> ! {
     for iterations in [10_000u32, 100_000] {
         let (c, _) = count(4, overhead, &mut (), |_| {}, |_| spin(iterations));
         // Expected: 2 per iteration plus the call, set-up and return (a handful).
-        line("calibration", 0, 0, if iterations == 10_000 { "spin_10000" } else { "spin_100000" }, c);
+        line(
+            "calibration",
+            0,
+            0,
+            if iterations == 10_000 {
+                "spin_10000"
+            } else {
+                "spin_100000"
+            },
+            c,
+        );
     }
 
     // Memory of the planner: model (scenario) and workspace (planner).
-    line("memory", 18, 64, "scenario_bytes", core::mem::size_of::<Scenario<18, 64, 1>>() as u64 * 10);
-    line("memory", 18, 64, "planner_bytes", core::mem::size_of::<Planner<18>>() as u64 * 10);
+    line(
+        "memory",
+        18,
+        64,
+        "scenario_bytes",
+        core::mem::size_of::<Scenario<18, 64, 1>>() as u64 * 10,
+    );
+    line(
+        "memory",
+        18,
+        64,
+        "planner_bytes",
+        core::mem::size_of::<Planner<18>>() as u64 * 10,
+    );
 
     for k in PIPS_OBSTACLES.into_iter().chain([64]) {
         match scenes::pips(k) {

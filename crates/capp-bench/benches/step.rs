@@ -63,7 +63,9 @@ fn pips(c: &mut Criterion) {
         });
         let mut phases = PhaseBench::new(sc, &planner);
         if k == 8 {
-            group.bench_function("kinematics", |b| b.iter(|| black_box(phases.kinematics(sc))));
+            group.bench_function("kinematics", |b| {
+                b.iter(|| black_box(phases.kinematics(sc)))
+            });
             group.bench_function("control_law", |b| {
                 b.iter(|| black_box(phases.control_law(sc)))
             });
@@ -89,7 +91,7 @@ fn scaling(c: &mut Criterion) {
             let scene = scene_or_exit(scenes::chain(n, m), "chain");
             let planner = warmed(&scene, "chain");
             let sc = &scene.scenario;
-            group.bench_function(format!("step/{n}x{m}"), |b| {
+            group.bench_with_input(BenchmarkId::new("step", format!("{n}x{m}")), &m, |b, _| {
                 b.iter_batched_ref(
                     || planner.clone(),
                     |p| black_box(p.step(sc)),

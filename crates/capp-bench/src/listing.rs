@@ -180,14 +180,14 @@ impl<const N: usize> Listing<N> {
         }
         let e4 = target.position - here.columns[3];
         let error = libm::sqrtf(e4.dot(&e4));
-        for j in 0..n {
-            let mut r = joints[j].weight * self.jacobian[j][3].dot(&e4) / error;
+        for ((joint, columns), rate) in joints.iter().zip(&self.jacobian).zip(&mut self.rate[..n]) {
+            let mut r = joint.weight * columns[3].dot(&e4) / error;
             if let Some(rt) = &target.orientation {
-                for c in 0..3 {
-                    r += ORIENTATION_WEIGHT * self.jacobian[j][c].dot(&rt.column(c).into_owned());
+                for (c, column) in columns.iter().take(3).enumerate() {
+                    r += ORIENTATION_WEIGHT * column.dot(&rt.column(c).into_owned());
                 }
             }
-            self.rate[j] = r;
+            *rate = r;
         }
         let size = libm::sqrtf(self.rate[..n].iter().map(|r| r * r).sum());
         let mu_sq: f32 = self.mu[..n].iter().map(|m| m * m).sum();
@@ -206,12 +206,12 @@ impl<const N: usize> Listing<N> {
             }
         }
         let h = scenario.settings().time_step_s;
-        for j in 0..n {
-            let mut r = self.rate[j];
-            if joints[j].kind == JointKind::Revolute {
-                r = r.clamp(-RATE_CLIP, RATE_CLIP);
-            }
-            self.q[j] = joints[j].clamp(self.q[j] + h * r);
+        for ((joint, q), &rate) in joints.iter().zip(&mut self.q[..n]).zip(&self.rate[..n]) {
+            let r = match joint.kind {
+                JointKind::Revolute => rate.clamp(-RATE_CLIP, RATE_CLIP),
+                JointKind::Prismatic => rate,
+            };
+            *q = joint.clamp(*q + h * r);
         }
         error
     }

@@ -140,12 +140,7 @@ fn clear_of<const N: usize>(
     settings: &Settings,
 ) -> bool {
     let avoidance = &settings.avoidance;
-    let Ok(o) = Obstacle::new(
-        0,
-        s,
-        avoidance.margins(),
-        avoidance.influence_distance,
-    ) else {
+    let Ok(o) = Obstacle::new(0, s, avoidance.margins(), avoidance.influence_distance) else {
         return false;
     };
     let ok = |p: &Vec3, kind| o.clearance_uncut(p, kind) >= MIN_START_CLEARANCE;
@@ -282,8 +277,8 @@ pub fn chain(joints: usize, obstacles: usize) -> Result<Scene<MAX_CHAIN_JOINTS>,
     let target = [p.x, p.y, p.z];
     let rows = [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]);
     forward_kinematics(&robot, &start[..joints], &mut frames);
-    let mission =
-        Mission::new(&[Waypoint::pose(target, rows)], settings()).map_err(ScenarioError::Mission)?;
+    let mission = Mission::new(&[Waypoint::pose(target, rows)], settings())
+        .map_err(ScenarioError::Mission)?;
     // The first placement whose warmed-up planner takes plain steps: a trapped
     // arm halving every step would measure the halvings, not the scaling.
     let mut attempt = 0;

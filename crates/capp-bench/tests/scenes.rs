@@ -21,7 +21,10 @@ fn every_scene_builds_and_warms_up_moving() {
             assert_eq!(scene.scenario.robot().len(), n);
             assert_eq!(scene.scenario.obstacles().len(), m);
             let planner = scenes::warm_up(&scene).unwrap();
-            assert!(matches!(planner.phase(), Phase::Moving { .. }), "chain {n} x {m}");
+            assert!(
+                matches!(planner.phase(), Phase::Moving { .. }),
+                "chain {n} x {m}"
+            );
         }
     }
 }
@@ -41,7 +44,12 @@ fn listing_differences_match_the_exact_products() {
     settings.avoidance.influence_distance = 1.0e4;
     let base = scenes::pips(8).unwrap();
     let planner = scenes::warm_up(&base).unwrap();
-    let obstacles: Vec<_> = base.scenario.obstacles().iter().map(|o| *o.source()).collect();
+    let obstacles: Vec<_> = base
+        .scenario
+        .obstacles()
+        .iter()
+        .map(|o| *o.source())
+        .collect();
     let mission = capp_core::Mission::new(base.scenario.waypoints(), settings).unwrap();
     let scenario =
         capp_core::Scenario::<18, 64, 1>::new(base.scenario.robot().clone(), &obstacles, &mission)
@@ -57,9 +65,12 @@ fn listing_differences_match_the_exact_products() {
     let mut terms = [[0.0; 18]; 4];
     lyapunov_terms(scenario.robot(), frames, &error, &mut terms);
     let size = terms[3].iter().fold(0.0f32, |a, t| a.max(t.abs()));
-    for j in 0..18 {
+    for (j, exact) in terms[3].iter().enumerate() {
         let fd = listing.jacobian_column(j, 3).dot(&error.e[3]);
-        assert!((fd - terms[3][j]).abs() < 3e-2 * size, "joint {j}: {fd} vs {}", terms[3][j]);
+        assert!(
+            (fd - exact).abs() < 3e-2 * size,
+            "joint {j}: {fd} vs {exact}"
+        );
     }
     // Obstacle gradient: differences of the powf potential against the exact
     // mu (f32 differences of a steep potential: a few per cent).
@@ -72,8 +83,10 @@ fn listing_differences_match_the_exact_products() {
         &mut mu,
     );
     let scale = mu.iter().fold(0.0f32, |a, m| a.max(m.abs()));
-    for j in 0..18 {
-        let fd = listing.obstacle_gradient()[j];
-        assert!((fd - mu[j]).abs() < 5e-2 * scale, "joint {j}: {fd} vs {}", mu[j]);
+    for (j, (fd, exact)) in listing.obstacle_gradient().iter().zip(&mu).enumerate() {
+        assert!(
+            (fd - exact).abs() < 5e-2 * scale,
+            "joint {j}: {fd} vs {exact}"
+        );
     }
 }

@@ -37,7 +37,8 @@ pub const SIN_COS_FAST_RANGE: f32 = 8192.0;
 /// `libm::sincosf` evaluates in `f64`, which a Cortex-M4F (single-precision
 /// FPU) runs in software: about 1 800 instructions a call, most of forward
 /// kinematics. Here: `x = j pi/2 + r` with `j` rounded, `r` by a three-part
-/// Cody-Waite reduction (exact products for `|j| < 2^15`), then Cephes'
+/// Cody-Waite reduction (its first two products exact for `|j| < 2^13`,
+/// which covers `SIN_COS_FAST_RANGE`), then Cephes'
 /// minimax polynomials for `sin r` and `cos r` on `|r| <= pi/4` (error about
 /// 1 ulp of the result, tested against `f64` below), and the quadrant `j mod 4`.
 /// About 40 instructions on the M4F.
@@ -45,9 +46,9 @@ pub const SIN_COS_FAST_RANGE: f32 = 8192.0;
 pub fn sin_cos(x: f32) -> (f32, f32) {
     // The three parts of pi/2: 8, 11 and 24 significant bits.
     const PIO2_HI: f32 = 1.570_312_5;
-    const PIO2_MID: f32 = 4.837_512_969_970_703_125e-4;
-    const PIO2_LO: f32 = 7.549_789_954_891_882e-8;
-    if !(x.abs() <= SIN_COS_FAST_RANGE) {
+    const PIO2_MID: f32 = 4.837_513e-4;
+    const PIO2_LO: f32 = 7.549_79e-8;
+    if x.is_nan() || x.abs() > SIN_COS_FAST_RANGE {
         return libm::sincosf(x);
     }
     let half = if x < 0.0 { -0.5 } else { 0.5 };
@@ -55,13 +56,9 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     let jf = j as f32;
     let r = ((x - jf * PIO2_HI) - jf * PIO2_MID) - jf * PIO2_LO;
     let z = r * r;
-    let sin_r = ((-1.951_529_589_1e-4 * z + 8.332_160_873_6e-3) * z - 1.666_665_461_1e-1) * z * r + r;
-    let cos_r = ((2.443_315_711_809_948e-5 * z - 1.388_731_625_493_765e-3) * z
-        + 4.166_664_568_298_827e-2)
-        * z
-        * z
-        - 0.5 * z
-        + 1.0;
+    let sin_r = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * r + r;
+    let cos_r =
+        ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
     match j & 3 {
         0 => (sin_r, cos_r),
         1 => (cos_r, -sin_r),

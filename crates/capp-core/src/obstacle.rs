@@ -354,11 +354,7 @@ impl Obstacle {
         if r.dot(&r) > self.reach_sq[k] {
             return None;
         }
-        let x = if self.aligned {
-            r
-        } else {
-            self.rotation_t * r
-        };
+        let x = if self.aligned { r } else { self.rotation_t * r };
         let reach = &self.reach[k];
         if x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z {
             return None;
@@ -498,7 +494,11 @@ mod tests {
         for k in 0..=32u8 {
             for i in 0..200 {
                 let u = i as f32 * 0.013_7 + 0.001;
-                assert_eq!(powi(u, k).to_bits(), powi_loop(u, k).to_bits(), "u = {u}, k = {k}");
+                assert_eq!(
+                    powi(u, k).to_bits(),
+                    powi_loop(u, k).to_bits(),
+                    "u = {u}, k = {k}"
+                );
             }
         }
     }
