@@ -33,8 +33,8 @@ use {defmt_semihosting as _, panic_semihosting as _};
 const INSTRUCTIONS_PER_TICK: u64 = 40;
 /// SysTick is a 24-bit down-counter.
 const SYSTICK_MASK: u32 = 0x00FF_FFFF;
-/// Repetitions of a single step or phase (each timed alone).
-const REPS: u32 = 25;
+/// Repetitions of a single step or phase (timed together: +-1.6 instructions).
+const REPS: u32 = 50;
 /// Consecutive steps timed along the trajectory after the warm-up.
 const WINDOW: u32 = 200;
 
@@ -82,6 +82,31 @@ fn count<S>(
     }
     let mean = (total * 10 / reps as u64).saturating_sub(overhead_tenths);
     (mean, max.saturating_sub(overhead_tenths / 10))
+}
+
+/// Mean instructions of `work`, in tenths: `reps` runs of `setup` then `work`
+/// timed as one interval, less `reps` runs of `setup` alone. Each interval is
+/// read to 40 instructions, so the mean is good to `80 / reps`; the clock
+/// reads cancel.
+fn repeat<S>(
+    reps: u32,
+    state: &mut S,
+    mut setup: impl FnMut(&mut S),
+    mut work: impl FnMut(&mut S),
+) -> u64 {
+    let t0 = ticks();
+    for _ in 0..reps {
+        setup(black_box(&mut *state));
+        work(black_box(&mut *state));
+    }
+    let with = since(t0) as u64;
+    let t0 = ticks();
+    for _ in 0..reps {
+        setup(black_box(&mut *state));
+        black_box(&mut *state);
+    }
+    let without = since(t0) as u64;
+    with.saturating_sub(without) * INSTRUCTIONS_PER_TICK * 10 / reps as u64
 }
 
 /// A loop of exactly two instructions per iteration (`subs`, `bne`).
@@ -148,9 +173,8 @@ fn measure<const N: usize>(
         return;
     };
     let mut planner = snapshot.clone();
-    let (step, step_max) = count(
+    let step = repeat(
         REPS,
-        overhead,
         &mut planner,
         |p| p.clone_from(&snapshot),
         |p| {
@@ -158,7 +182,6 @@ fn measure<const N: usize>(
         },
     );
     line(name, n, m, "step", step);
-    line(name, n, m, "step_max", step_max * 10);
     let mut phases = PhaseBench::new(sc, &snapshot);
     line(
         name,
@@ -168,9 +191,8 @@ fn measure<const N: usize>(
         phases.active_pairs() as u64 * 10,
     );
     if with_phases {
-        let (k, _) = count(
+        let k = repeat(
             REPS,
-            overhead,
             &mut phases,
             |_| {},
             |b| {
@@ -178,9 +200,8 @@ fn measure<const N: usize>(
             },
         );
         line(name, n, m, "kinematics", k);
-        let (c, _) = count(
+        let c = repeat(
             REPS,
-            overhead,
             &mut phases,
             |_| {},
             |b| {
@@ -188,9 +209,8 @@ fn measure<const N: usize>(
             },
         );
         line(name, n, m, "control_law", c);
-        let (o, _) = count(
+        let o = repeat(
             REPS,
-            overhead,
             &mut phases,
             |_| {},
             |b| {
@@ -198,9 +218,8 @@ fn measure<const N: usize>(
             },
         );
         line(name, n, m, "obstacles", o);
-        let (p, _) = count(
+        let p = repeat(
             REPS,
-            overhead,
             &mut phases,
             |_| {},
             |b| {
@@ -227,15 +246,15 @@ fn measure<const N: usize>(
         line(name, n, m, "window_halvings", halvings * 10);
     }
     if with_phases && m > 0 {
-        pair_costs(name, scene, &snapshot, overhead);
+        pair_costs(name, scene, &snapshot);
     }
     if listing_reps > 0 {
-        let mut listing = Listing::<N>::new(snapshot.joints());
-        let (l, _) = count(
+        let start = Listing::<N>::new(snapshot.joints());
+        let mut listing = start.clone();
+        let l = repeat(
             listing_reps,
-            overhead,
             &mut listing,
-            |_| {},
+            |l| l.clone_from(&start),
             |l| {
                 black_box(l.step(sc));
             },
@@ -246,7 +265,7 @@ fn measure<const N: usize>(
 
 /// Instructions of one point / obstacle evaluation (`Obstacle::contact`):
 /// the mean over the pairs within influence and over those outside it.
-fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>, overhead: u64) {
+fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>) {
     let sc = &scene.scenario;
     let (n, m) = (scene.joints, sc.obstacles().len());
     let avoidance = &sc.settings().avoidance;
@@ -254,9 +273,8 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
     for point in capp_core::avoidance::points(planner.frames(), avoidance) {
         for obstacle in sc.obstacles() {
             let mut hit = false;
-            let (c, _) = count(
-                4,
-                overhead,
+            let c = repeat(
+                8,
                 &mut hit,
                 |_| {},
                 |h| {
@@ -291,7 +309,7 @@ fn main() -> ! {
     let (overhead, _) = count(200, 0, &mut (), |_| {}, |_| {});
     line("clock", 0, 0, "overhead", overhead);
     for iterations in [10_000u32, 100_000] {
-        let (c, _) = count(4, overhead, &mut (), |_| {}, |_| spin(iterations));
+        let c = repeat(16, &mut (), |_| {}, |_| spin(iterations));
         // Expected: 2 per iteration plus the call, set-up and return (a handful).
         line(
             "calibration",
