@@ -84,8 +84,8 @@ fn scaling(c: &mut Criterion) {
     let mut group = c.benchmark_group("scaling");
     group
         .warm_up_time(Duration::from_millis(300))
-        .measurement_time(Duration::from_millis(800))
-        .sample_size(20);
+        .measurement_time(Duration::from_millis(1500))
+        .sample_size(30);
     for n in SCALING_JOINTS {
         for m in SCALING_OBSTACLES {
             let scene = scene_or_exit(scenes::chain(n, m), "chain");
