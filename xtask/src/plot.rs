@@ -165,7 +165,7 @@ pub fn scaling(host: &Host, counts: &Counts) -> Canvas {
                 .filter_map(|&n| {
                     Some((
                         n as f64,
-                        host.fastest(&format!("scaling/step/{n}x{m}"))? / 1000.0,
+                        host.get(&format!("scaling/step/{n}x{m}"))? / 1000.0,
                     ))
                 })
                 .collect()
@@ -182,7 +182,7 @@ pub fn scaling(host: &Host, counts: &Counts) -> Canvas {
         &mut shapes,
         (560.0, 50.0),
         (360.0, 300.0),
-        "host: microseconds per step (fastest sample)",
+        "host: microseconds per step (median)",
         &host_us,
     );
     // Legend: one coloured line and the obstacle count.

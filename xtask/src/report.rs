@@ -26,9 +26,6 @@ pub const END: &str = "<!-- xtask bench: end -->";
 #[derive(Debug, Default)]
 pub struct Host {
     median_ns: BTreeMap<String, f64>,
-    /// The fastest sample's mean time per iteration: what the code costs when
-    /// the shared machine's other work did not get in the way.
-    fastest_ns: BTreeMap<String, f64>,
 }
 
 impl Host {
@@ -44,11 +41,6 @@ impl Host {
     /// Median time of one benchmark, nanoseconds.
     pub fn get(&self, path: &str) -> Option<f64> {
         self.median_ns.get(path).copied()
-    }
-
-    /// Fastest sample of one benchmark, nanoseconds per iteration.
-    pub fn fastest(&self, path: &str) -> Option<f64> {
-        self.fastest_ns.get(path).copied()
     }
 }
 
@@ -67,23 +59,7 @@ fn visit(base: &Path, dir: &Path, host: &mut Host) -> Result<()> {
                 .to_string_lossy()
                 .replace('\\', "/");
             if let Some(ns) = json["median"]["point_estimate"].as_f64() {
-                host.median_ns.insert(id.clone(), ns);
-            }
-            let samples = path.join("new/sample.json");
-            if let Ok(text) = std::fs::read_to_string(&samples) {
-                let json: serde_json::Value = serde_json::from_str(&text)?;
-                if let (Some(iters), Some(times)) =
-                    (json["iters"].as_array(), json["times"].as_array())
-                {
-                    let fastest = iters
-                        .iter()
-                        .zip(times)
-                        .filter_map(|(i, t)| Some(t.as_f64()? / i.as_f64()?))
-                        .fold(f64::INFINITY, f64::min);
-                    if fastest.is_finite() {
-                        host.fastest_ns.insert(id, fastest);
-                    }
-                }
+                host.median_ns.insert(id, ns);
             }
         }
         visit(base, &path, host)?;
@@ -405,7 +381,7 @@ pub fn tables(
 
     let _ = writeln!(w, "### Scaling: chains of n joints, m obstacles");
     let _ = writeln!(w);
-    let _ = writeln!(w, "M4F instructions per step (host in brackets: the fastest criterion sample, since the shared machine's other work inflates medians unevenly across a sweep of short runs):");
+    let _ = writeln!(w, "M4F instructions per step (host median in brackets; on this shared machine a host figure can be off by a factor of 1.5 from one run to the next, the M4F counts are exact):");
     let _ = writeln!(w);
     let _ = write!(w, "| joints \\ obstacles |");
     for m in SCALING_OBSTACLES {
@@ -416,7 +392,7 @@ pub fn tables(
     for n in SCALING_JOINTS {
         let _ = write!(w, "| {n} |");
         for m in SCALING_OBSTACLES {
-            let host_ns = host.fastest(&format!("scaling/step/{n}x{m}"));
+            let host_ns = host.get(&format!("scaling/step/{n}x{m}"));
             let _ = write!(
                 w,
                 " {}{} |",
@@ -452,7 +428,7 @@ pub fn tables(
     let _ = writeln!(w);
     let m4f = scaling(counts, |n, m| counts.get("chain", n, m, "step"));
     let host_points = scaling(counts, |n, m| {
-        host.fastest(&format!("scaling/step/{n}x{m}"))
+        host.get(&format!("scaling/step/{n}x{m}"))
     });
     let deviation = |worst: f64| {
         format!(
