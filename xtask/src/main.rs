@@ -1,15 +1,16 @@
 //! Project tasks, run as `cargo xtask <task>` (alias in `.cargo/config.toml`).
 //!
 //! * `cargo xtask bench`: every benchmark figure of BENCHMARKS.md. Runs the
-//!   criterion benches (`crates/capp-bench/benches/step.rs`), builds the
+//!   criterion benches (`crates/capp-bench/benches/step.rs`) and the
+//!   interleaved host scaling sweep (`crates/capp-bench/examples/host_scaling.rs`), builds the
 //!   Cortex-M4F counter (`firmware/examples/step_count.rs`) and runs it under
 //!   `qemu-system-arm -machine mps2-an386 -icount shift=0`, measures the
 //!   firmware (flash, static RAM from `size -A`; peak stack from the QEMU
 //!   end-to-end test), then rewrites the generated part of `BENCHMARKS.md` and
 //!   the scaling plot `docs/img/scaling.{svg,png}`. A few minutes.
 //! * `cargo xtask bench --quick`: a smoke check in well under a minute of
-//!   measuring: short criterion runs of the PIPS benches only, the M4F counts,
-//!   no end-to-end test; prints the tables, writes nothing.
+//!   measuring: short criterion runs, a short sweep, the M4F counts, no
+//!   end-to-end test; prints the tables, writes nothing.
 
 mod m4f;
 mod plot;
@@ -85,7 +86,19 @@ fn bench(quick: bool) -> Result<()> {
         ]);
     }
     run(&mut criterion)?;
-    let host = report::Host::load(&root.join("target/criterion"))?;
+    let mut host = report::Host::load(&root.join("target/criterion"))?;
+    let rounds = if quick { "21" } else { "301" };
+    let sweep = output(Command::new(&cargo).current_dir(&root).args([
+        "run",
+        "--release",
+        "-p",
+        "capp-bench",
+        "--example",
+        "host_scaling",
+        "--",
+        rounds,
+    ]))?;
+    host.add_scaling(&sweep)?;
 
     // 2. Cortex-M4F: the counter under QEMU.
     let firmware = root.join("firmware");

@@ -162,12 +162,7 @@ pub fn scaling(host: &Host, counts: &Counts) -> Canvas {
         .map(|&m| {
             SCALING_JOINTS
                 .iter()
-                .filter_map(|&n| {
-                    Some((
-                        n as f64,
-                        host.get(&format!("scaling/step/{n}x{m}"))? / 1000.0,
-                    ))
-                })
+                .filter_map(|&n| Some((n as f64, host.scaling(n, m)? / 1000.0)))
                 .collect()
         })
         .collect();

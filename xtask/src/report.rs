@@ -22,10 +22,12 @@ pub const BEGIN: &str = "<!-- xtask bench: begin (generated, do not edit) -->";
 /// End marker.
 pub const END: &str = "<!-- xtask bench: end -->";
 
-/// Criterion's results, nanoseconds, by benchmark path (`pips/step/8`).
+/// Host results, nanoseconds: criterion's medians by benchmark path
+/// (`pips/step/8`), and the interleaved scaling sweep by (joints, obstacles).
 #[derive(Debug, Default)]
 pub struct Host {
     median_ns: BTreeMap<String, f64>,
+    scaling_ns: BTreeMap<(usize, usize), f64>,
 }
 
 impl Host {
@@ -41,6 +43,22 @@ impl Host {
     /// Median time of one benchmark, nanoseconds.
     pub fn get(&self, path: &str) -> Option<f64> {
         self.median_ns.get(path).copied()
+    }
+
+    /// Reads the `HOST <joints> <obstacles> <ns>` lines of `examples/host_scaling.rs`.
+    pub fn add_scaling(&mut self, text: &str) -> Result<()> {
+        for line in text.lines() {
+            if let ["HOST", n, m, ns] = line.split_whitespace().collect::<Vec<_>>()[..] {
+                self.scaling_ns
+                    .insert((n.parse()?, m.parse()?), ns.parse()?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Median host time per step of the chain of `joints` with `obstacles`, nanoseconds.
+    pub fn scaling(&self, joints: usize, obstacles: usize) -> Option<f64> {
+        self.scaling_ns.get(&(joints, obstacles)).copied()
     }
 }
 
@@ -381,7 +399,7 @@ pub fn tables(
 
     let _ = writeln!(w, "### Scaling: chains of n joints, m obstacles");
     let _ = writeln!(w);
-    let _ = writeln!(w, "M4F instructions per step (host median in brackets; on this shared machine a host figure can be off by a factor of 1.5 from one run to the next, the M4F counts are exact):");
+    let _ = writeln!(w, "M4F instructions per step (host in brackets: median over interleaved rounds, `crates/capp-bench/examples/host_scaling.rs`):");
     let _ = writeln!(w);
     let _ = write!(w, "| joints \\ obstacles |");
     for m in SCALING_OBSTACLES {
@@ -392,7 +410,7 @@ pub fn tables(
     for n in SCALING_JOINTS {
         let _ = write!(w, "| {n} |");
         for m in SCALING_OBSTACLES {
-            let host_ns = host.get(&format!("scaling/step/{n}x{m}"));
+            let host_ns = host.scaling(n, m);
             let _ = write!(
                 w,
                 " {}{} |",
@@ -427,9 +445,7 @@ pub fn tables(
     }
     let _ = writeln!(w);
     let m4f = scaling(counts, |n, m| counts.get("chain", n, m, "step"));
-    let host_points = scaling(counts, |n, m| {
-        host.get(&format!("scaling/step/{n}x{m}"))
-    });
+    let host_points = scaling(counts, |n, m| host.scaling(n, m));
     let deviation = |worst: f64| {
         format!(
             "largest deviation of a measured point from the fit: {:.0} %",

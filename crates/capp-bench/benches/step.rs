@@ -1,7 +1,8 @@
 //! Host benchmarks (criterion): one planner step of PIPS with 0, 8 and 32
 //! obstacles against one step of the paper's listing (finite differences) on
-//! the same scenarios and configuration, each phase alone, and the scaling
-//! sweep over chains of 6 to 32 joints and 0 to 64 obstacles.
+//! the same scenarios and configuration, and each phase alone. (The scaling
+//! sweep is `examples/host_scaling.rs`: interleaved, so a shared machine's
+//! bursts do not land on a few of its 25 scenes.)
 //!
 //!     cargo bench -p capp-bench --bench step
 //!
@@ -12,7 +13,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use capp_bench::scenes::{self, PIPS_OBSTACLES, SCALING_JOINTS, SCALING_OBSTACLES};
+use capp_bench::scenes::{self, PIPS_OBSTACLES};
 use capp_bench::{Listing, PhaseBench, Scene};
 use capp_core::Planner;
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
@@ -80,35 +81,12 @@ fn pips(c: &mut Criterion) {
     group.finish();
 }
 
-fn scaling(c: &mut Criterion) {
-    let mut group = c.benchmark_group("scaling");
-    group
-        .warm_up_time(Duration::from_millis(300))
-        .measurement_time(Duration::from_millis(1500))
-        .sample_size(30);
-    for n in SCALING_JOINTS {
-        for m in SCALING_OBSTACLES {
-            let scene = scene_or_exit(scenes::chain(n, m), "chain");
-            let planner = warmed(&scene, "chain");
-            let sc = &scene.scenario;
-            group.bench_with_input(BenchmarkId::new("step", format!("{n}x{m}")), &m, |b, _| {
-                b.iter_batched_ref(
-                    || planner.clone(),
-                    |p| black_box(p.step(sc)),
-                    BatchSize::SmallInput,
-                )
-            });
-        }
-    }
-    group.finish();
-}
-
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(2))
         .sample_size(30);
-    targets = pips, scaling
+    targets = pips
 }
 criterion_main!(benches);
