@@ -465,7 +465,8 @@ pub fn tables(
         }
     }
     let _ = writeln!(w);
-    let _ = writeln!(w, "![Instructions per step against joints, one line per obstacle count](docs/img/scaling.svg)");
+    let _ = writeln!(w, "![Cost per step against joints, one line per obstacle count: left M4F thousand instructions, right host microseconds](docs/img/scaling.svg)");
+    let _ = writeln!(w, "Left: M4F, thousand instructions per step; right: host, microseconds per step; x: joints; one line per obstacle count (0, 8, 16, 32, 64). Also as `docs/img/scaling.png`.");
     let _ = writeln!(w);
 
     let _ = writeln!(w, "### Memory");
@@ -528,7 +529,7 @@ pub fn tables(
     let _ = writeln!(w, "|---|---|---|");
     let _ = writeln!(
         w,
-        "| reading SysTick twice (subtracted from every figure) | a few | {} |",
+        "| reading SysTick twice (subtracted from the window figures; cancels in the others) | a few | {} |",
         opt(counts.get("clock", 0, 0, "overhead"), |x| format!("{x:.1}"))
     );
     let _ = writeln!(
