@@ -41,3 +41,15 @@ done
 
 step "end to end under QEMU (mps2-an386)"
 CAPP_REQUIRE_QEMU=1 cargo test -p capp-system-tests -- --nocapture
+
+step "M4F instruction counter under QEMU (smoke: it runs and finishes; BENCHMARKS.md has the figures)"
+(
+  cd firmware
+  cargo clippy --release --example step_count -- -D warnings
+  cargo build --release --example step_count
+)
+counts="$(timeout 120 qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=off -nographic \
+  -monitor none -semihosting-config enable=on,target=native \
+  -kernel firmware/target/thumbv7em-none-eabihf/release/examples/step_count)"
+grep -E '^M4F (calibration|pips 18 8 step )' <<<"$counts"
+grep -q 'step_count: done' <<<"$counts"

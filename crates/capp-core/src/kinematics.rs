@@ -18,7 +18,7 @@
 //! and for a direction error `e` on `u`, `(J_u^T e)_j = z . (u x e)` or `0`.
 //! Each product costs O(n) after one forward pass; no 6 x n matrix is formed.
 
-use crate::math::{Mat3, Vec3};
+use crate::math::{sin_cos, Mat3, Vec3};
 use crate::robot::{JointKind, Robot};
 
 /// Every frame of the chain at one configuration. Sized once for `N` joints.
@@ -106,7 +106,7 @@ impl<const N: usize> Frames<N> {
 ///
 /// `q` must hold `robot.len()` values (the caller validated it); extra values
 /// are ignored and missing ones are treated as the end of the chain.
-/// Cost: one `sincosf` per revolute joint and about 40 flops per joint.
+/// Cost: one [`sin_cos`] per revolute joint and about 40 flops per joint.
 pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &mut Frames<N>) {
     let mut rot = Mat3::identity();
     let mut o = Vec3::zeros();
@@ -124,7 +124,7 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
         *axis = z;
         let (ct, st, d) = match joint.kind {
             JointKind::Revolute => {
-                let (s, c) = libm::sincosf(qj);
+                let (s, c) = sin_cos(qj);
                 (c, s, joint.d)
             }
             JointKind::Prismatic => (link.cos_theta, link.sin_theta, qj),

@@ -37,8 +37,9 @@
 //! * Work per [`planner::Planner::step`] is bounded by the joint, point and
 //!   obstacle counts (and a fixed number of step halvings); no loop depends on
 //!   the data's values.
-//! * Every transcendental goes through `libm`, so the same inputs give the same
-//!   bits on the host and on a Cortex-M4F.
+//! * Every transcendental goes through `libm` or [`math::sin_cos`] (plain `f32`
+//!   operations, which round alike everywhere), so the same inputs give the
+//!   same bits on the host and on a Cortex-M4F.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]

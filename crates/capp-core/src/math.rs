@@ -1,5 +1,8 @@
 //! Small numeric helpers shared by the modules: 3-vectors, rotations from
-//! 1-2-3 Euler angles, rotation checks. All transcendentals through `libm`.
+//! 1-2-3 Euler angles, rotation checks, and the joint angles' sine and cosine.
+//! Every transcendental is either `libm` or [`sin_cos`], written in `f32`
+//! operations only: IEEE `f32` arithmetic rounds the same everywhere, so the
+//! host and a Cortex-M4F compute the same bits.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -24,6 +27,44 @@ pub fn norm_slice(v: &[f32]) -> f32 {
 #[inline]
 pub fn dot_slice(a: &[f32], b: &[f32]) -> f32 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Largest `|x|` [`sin_cos`] reduces itself; beyond it (and for NaN) it calls `libm`.
+pub const SIN_COS_FAST_RANGE: f32 = 8192.0;
+
+/// `(sin x, cos x)` in `f32` arithmetic only, for the per-step joint angles.
+///
+/// `libm::sincosf` evaluates in `f64`, which a Cortex-M4F (single-precision
+/// FPU) runs in software: about 1 800 instructions a call, most of forward
+/// kinematics. Here: `x = j pi/2 + r` with `j` rounded, `r` by a three-part
+/// Cody-Waite reduction (its first two products exact for `|j| < 2^13`,
+/// which covers `SIN_COS_FAST_RANGE`), then Cephes'
+/// minimax polynomials for `sin r` and `cos r` on `|r| <= pi/4` (error about
+/// 1 ulp of the result, tested against `f64` below), and the quadrant `j mod 4`.
+/// About 40 instructions on the M4F.
+#[inline]
+pub fn sin_cos(x: f32) -> (f32, f32) {
+    // The three parts of pi/2: 8, 11 and 24 significant bits.
+    const PIO2_HI: f32 = 1.570_312_5;
+    const PIO2_MID: f32 = 4.837_513e-4;
+    const PIO2_LO: f32 = 7.549_79e-8;
+    if x.is_nan() || x.abs() > SIN_COS_FAST_RANGE {
+        return libm::sincosf(x);
+    }
+    let half = if x < 0.0 { -0.5 } else { 0.5 };
+    let j = (x * core::f32::consts::FRAC_2_PI + half) as i32;
+    let jf = j as f32;
+    let r = ((x - jf * PIO2_HI) - jf * PIO2_MID) - jf * PIO2_LO;
+    let z = r * r;
+    let sin_r = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * r + r;
+    let cos_r =
+        ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
+    match j & 3 {
+        0 => (sin_r, cos_r),
+        1 => (cos_r, -sin_r),
+        2 => (-sin_r, -cos_r),
+        _ => (-cos_r, sin_r),
+    }
 }
 
 /// `Vec3` from an array.
@@ -115,6 +156,26 @@ mod tests {
         let got = rotation_123(rx, ry, rz);
         assert!((expect - got).abs().max() < 1e-6);
         assert!(is_rotation(&got, 1e-5));
+    }
+
+    #[test]
+    fn sin_cos_is_within_two_ulp_of_f64() {
+        let mut worst = 0.0f64;
+        let mut x = -20.0f32;
+        while x <= 20.0 {
+            let (s, c) = sin_cos(x);
+            let (se, ce) = (x as f64).sin_cos();
+            // Absolute error against ulps of 1: what FK's products see.
+            worst = worst.max((s as f64 - se).abs()).max((c as f64 - ce).abs());
+            x += 0.000_37;
+        }
+        assert!(worst < 2.0 * f32::EPSILON as f64, "worst error {worst}");
+        for x in [1.0e4f32, -3.0e5, f32::INFINITY, f32::NAN] {
+            let (s, c) = sin_cos(x);
+            let (ls, lc) = libm::sincosf(x);
+            assert_eq!((s.to_bits(), c.to_bits()), (ls.to_bits(), lc.to_bits()));
+        }
+        assert_eq!(sin_cos(0.0), (0.0, 1.0));
     }
 
     #[test]

@@ -1,0 +1,373 @@
+//! Counts the instructions one planner step (and each of its phases, and the
+//! paper's finite-difference listing) executes on the Cortex-M4F, under QEMU:
+//!
+//!     cd firmware && cargo build --release --example step_count
+//!     qemu-system-arm -machine mps2-an386 -icount shift=0 -nographic -monitor none \
+//!         -semihosting-config enable=on,target=native \
+//!         -kernel target/thumbv7em-none-eabihf/release/examples/step_count
+//!
+//! With `-icount shift=0` QEMU's virtual clock advances exactly 1 ns per
+//! executed instruction, and the mps2-an386 SysTick (core clock source) counts
+//! at 25 MHz of that clock: one tick = 40 instructions. Every figure is a mean
+//! over repetitions of the same work from the same state, minus the cost of
+//! reading the clock; the count is checked first on a loop of known length.
+//! Output: one `M4F <scene> <joints> <obstacles> <what> <value>` line per
+//! figure on the semihosting console (stdout), then QEMU exits.
+//! `cargo xtask bench` runs this and collects the lines.
+#![no_std]
+#![no_main]
+
+use core::arch::asm;
+use core::hint::black_box;
+use core::sync::atomic::{compiler_fence, Ordering};
+
+use capp_bench::scenes::{self, Scene, PIPS_OBSTACLES, SCALING_JOINTS, SCALING_OBSTACLES};
+use capp_bench::{Listing, PhaseBench};
+use capp_core::{Planner, Scenario};
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use {defmt_semihosting as _, panic_semihosting as _};
+
+/// Instructions per SysTick tick: 1 ns per instruction, 25 MHz SysTick.
+const INSTRUCTIONS_PER_TICK: u64 = 40;
+/// SysTick is a 24-bit down-counter.
+const SYSTICK_MASK: u32 = 0x00FF_FFFF;
+/// Repetitions of a single step or phase (timed together: +-1.6 instructions).
+const REPS: u32 = 50;
+/// Consecutive steps timed along the trajectory after the warm-up.
+const WINDOW: u32 = 200;
+
+/// SysTick running free over its full 24 bits from the core clock.
+fn start_clock(mut syst: SYST) -> SYST {
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(SYSTICK_MASK);
+    syst.clear_current();
+    syst.enable_counter();
+    syst
+}
+
+#[inline(always)]
+fn ticks() -> u32 {
+    compiler_fence(Ordering::SeqCst);
+    let t = SYST::get_current();
+    compiler_fence(Ordering::SeqCst);
+    t
+}
+
+/// Ticks elapsed since `start` (intervals under 2^24 ticks = 671 M instructions).
+#[inline(always)]
+fn since(start: u32) -> u32 {
+    start.wrapping_sub(ticks()) & SYSTICK_MASK
+}
+
+/// Mean instructions of `work` over `reps` runs, each after `setup`, in tenths,
+/// with `overhead_tenths` (the clock reads) removed; and the largest single run.
+fn count<S>(
+    reps: u32,
+    overhead_tenths: u64,
+    state: &mut S,
+    mut setup: impl FnMut(&mut S),
+    mut work: impl FnMut(&mut S),
+) -> (u64, u64) {
+    let mut total = 0u64;
+    let mut max = 0u64;
+    for _ in 0..reps {
+        setup(state);
+        let t0 = ticks();
+        work(state);
+        let t = since(t0) as u64 * INSTRUCTIONS_PER_TICK;
+        total += t;
+        max = max.max(t);
+    }
+    let mean = (total * 10 / reps as u64).saturating_sub(overhead_tenths);
+    (mean, max.saturating_sub(overhead_tenths / 10))
+}
+
+/// Mean instructions of `work`, in tenths: `reps` runs of `setup` then `work`
+/// timed as one interval, less `reps` runs of `setup` alone. Each interval is
+/// read to 40 instructions, so the mean is good to `80 / reps`; the clock
+/// reads cancel.
+fn repeat<S>(
+    reps: u32,
+    state: &mut S,
+    mut setup: impl FnMut(&mut S),
+    mut work: impl FnMut(&mut S),
+) -> u64 {
+    let t0 = ticks();
+    for _ in 0..reps {
+        setup(black_box(&mut *state));
+        work(black_box(&mut *state));
+    }
+    let with = since(t0) as u64;
+    let t0 = ticks();
+    for _ in 0..reps {
+        setup(black_box(&mut *state));
+        black_box(&mut *state);
+    }
+    let without = since(t0) as u64;
+    with.saturating_sub(without) * INSTRUCTIONS_PER_TICK * 10 / reps as u64
+}
+
+/// A loop of exactly two instructions per iteration (`subs`, `bne`).
+#[inline(never)]
+fn spin(iterations: u32) {
+    // SAFETY: register-only loop, no memory or stack use.
+    unsafe {
+        asm!("1:", "subs {0}, {0}, #1", "bne 1b", inout(reg) iterations => _, options(nomem, nostack));
+    }
+}
+
+fn line(scene: &str, joints: usize, obstacles: usize, what: &str, tenths: u64) {
+    hprintln!(
+        "M4F {} {} {} {} {}.{}",
+        scene,
+        joints,
+        obstacles,
+        what,
+        tenths / 10,
+        tenths % 10
+    );
+}
+
+fn stack_pointer() -> usize {
+    cortex_m::register::msp::read() as usize
+}
+
+const PAINT: u32 = 0xCCCC_CCCC;
+const PAINT_BYTES: usize = 32 * 1024;
+
+/// Bytes of stack `work` uses below the caller's frame, by painting.
+#[inline(never)]
+fn stack_use(work: impl FnOnce()) -> usize {
+    let top = stack_pointer() - 256;
+    let bottom = top - PAINT_BYTES;
+    let mut p = bottom;
+    while p < top {
+        // SAFETY: unused stack below the current frame (4 MiB of RAM, the
+        // stack grows down from its top); nothing lives there yet.
+        unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+        p += 4;
+    }
+    work();
+    let mut p = bottom;
+    // SAFETY: the same words, read back.
+    while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+        p += 4;
+    }
+    top + 256 - p
+}
+
+/// Step, phases, listing and a trajectory window for one scene.
+fn measure<const N: usize>(
+    name: &str,
+    scene: &Scene<N>,
+    overhead: u64,
+    with_phases: bool,
+    listing_reps: u32,
+) {
+    let (n, m) = (scene.joints, scene.scenario.obstacles().len());
+    let sc = &scene.scenario;
+    let Ok(snapshot) = scenes::warm_up(scene) else {
+        hprintln!("M4F {} {} {} error warm-up", name, n, m);
+        return;
+    };
+    let mut planner = snapshot.clone();
+    let step = repeat(
+        REPS,
+        &mut planner,
+        |p| p.clone_from(&snapshot),
+        |p| {
+            black_box(p.step(sc).ok());
+        },
+    );
+    line(name, n, m, "step", step);
+    let mut phases = PhaseBench::new(sc, &snapshot);
+    line(
+        name,
+        n,
+        m,
+        "active_pairs",
+        phases.active_pairs() as u64 * 10,
+    );
+    if with_phases {
+        let k = repeat(
+            REPS,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.kinematics(sc));
+            },
+        );
+        line(name, n, m, "kinematics", k);
+        let c = repeat(
+            REPS,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.control_law(sc));
+            },
+        );
+        line(name, n, m, "control_law", c);
+        let o = repeat(
+            REPS,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.obstacles(sc));
+            },
+        );
+        line(name, n, m, "obstacles", o);
+        let p = repeat(
+            REPS,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.projection_integration(sc));
+            },
+        );
+        line(name, n, m, "projection_integration", p);
+        // A run of consecutive steps: the mean and the worst along the path.
+        planner.clone_from(&snapshot);
+        let mut halvings = 0u64;
+        let (mean, max) = count(
+            WINDOW,
+            overhead,
+            &mut planner,
+            |_| {},
+            |p| {
+                if let Ok(r) = p.step(sc) {
+                    halvings += r.halvings as u64;
+                }
+            },
+        );
+        line(name, n, m, "window_mean", mean);
+        line(name, n, m, "window_max", max * 10);
+        line(name, n, m, "window_halvings", halvings * 10);
+    }
+    if with_phases && m > 0 {
+        pair_costs(name, scene, &snapshot);
+    }
+    if listing_reps > 0 {
+        let start = Listing::<N>::new(snapshot.joints());
+        let mut listing = start.clone();
+        let l = repeat(
+            listing_reps,
+            &mut listing,
+            |l| l.clone_from(&start),
+            |l| {
+                black_box(l.step(sc));
+            },
+        );
+        line(name, n, m, "listing_step", l);
+    }
+}
+
+/// Instructions of one point / obstacle evaluation (`Obstacle::contact`):
+/// the mean over the pairs within influence and over those outside it.
+fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>) {
+    let sc = &scene.scenario;
+    let (n, m) = (scene.joints, sc.obstacles().len());
+    let avoidance = &sc.settings().avoidance;
+    let (mut active, mut active_n, mut idle, mut idle_n) = (0u64, 0u64, 0u64, 0u64);
+    for point in capp_core::avoidance::points(planner.frames(), avoidance) {
+        for obstacle in sc.obstacles() {
+            let mut hit = false;
+            let c = repeat(
+                8,
+                &mut hit,
+                |_| {},
+                |h| {
+                    *h = black_box(obstacle.contact(black_box(&point.position), point.kind))
+                        .is_some();
+                },
+            );
+            if hit {
+                active += c;
+                active_n += 1;
+            } else {
+                idle += c;
+                idle_n += 1;
+            }
+        }
+    }
+    if let Some(mean) = active.checked_div(active_n) {
+        line(name, n, m, "contact_within_influence", mean);
+    }
+    if let Some(mean) = idle.checked_div(idle_n) {
+        line(name, n, m, "contact_outside_influence", mean);
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let cp = cortex_m::Peripherals::take().unwrap();
+    let _clock = start_clock(cp.SYST);
+    hprintln!("capp step_count: mps2-an386, 1 instruction = 1 ns (-icount shift=0), SysTick 25 MHz = 40 instructions per tick");
+
+    // The clock's own cost, then a loop of known length.
+    let (overhead, _) = count(200, 0, &mut (), |_| {}, |_| {});
+    line("clock", 0, 0, "overhead", overhead);
+    for iterations in [10_000u32, 100_000] {
+        let c = repeat(16, &mut (), |_| {}, |_| spin(iterations));
+        // Expected: 2 per iteration plus the call, set-up and return (a handful).
+        line(
+            "calibration",
+            0,
+            0,
+            if iterations == 10_000 {
+                "spin_10000"
+            } else {
+                "spin_100000"
+            },
+            c,
+        );
+    }
+
+    // Memory of the planner: model (scenario) and workspace (planner).
+    line(
+        "memory",
+        18,
+        64,
+        "scenario_bytes",
+        core::mem::size_of::<Scenario<18, 64, 1>>() as u64 * 10,
+    );
+    line(
+        "memory",
+        18,
+        64,
+        "planner_bytes",
+        core::mem::size_of::<Planner<18>>() as u64 * 10,
+    );
+
+    for k in PIPS_OBSTACLES.into_iter().chain([64]) {
+        match scenes::pips(k) {
+            Ok(scene) => {
+                let listing_reps = if k <= 32 { 2 } else { 0 };
+                measure("pips", &scene, overhead, true, listing_reps);
+                if k == 64 {
+                    if let Ok(mut planner) = scenes::warm_up(&scene) {
+                        let used = stack_use(|| {
+                            black_box(planner.step(&scene.scenario).ok());
+                        });
+                        line("memory", 18, 64, "step_stack_bytes", used as u64 * 10);
+                    }
+                }
+            }
+            Err(e) => hprintln!("M4F pips 18 {} error {:?}", k, e),
+        }
+    }
+    for n in SCALING_JOINTS {
+        for m in SCALING_OBSTACLES {
+            match scenes::chain(n, m) {
+                Ok(scene) => measure("chain", &scene, overhead, false, 0),
+                Err(e) => hprintln!("M4F chain {} {} error {:?}", n, m, e),
+            }
+        }
+    }
+    hprintln!("capp step_count: done");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
