@@ -21,7 +21,9 @@ use core::arch::asm;
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 
-use capp_bench::scenes::{self, Scene, PIPS_OBSTACLES, SCALING_JOINTS, SCALING_OBSTACLES};
+use capp_bench::scenes::{
+    self, Scene, INFLUENCE_SWEEP_IN, PIPS_OBSTACLES, SCALING_JOINTS, SCALING_OBSTACLES,
+};
 use capp_bench::{Listing, PhaseBench};
 use capp_core::{Planner, Scenario};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
@@ -355,6 +357,34 @@ fn main() -> ! {
                 }
             }
             Err(e) => hprintln!("M4F pips 18 {} error {:?}", k, e),
+        }
+    }
+    // What the influence distance costs: PIPS with 8 obstacles, one line per
+    // distance, `joints` = the distance in inches.
+    for influence in INFLUENCE_SWEEP_IN {
+        let inches = influence as usize;
+        let measured = scenes::pips_with_influence(8, influence)
+            .map_err(|_| "scene")
+            .and_then(|scene| {
+                let snapshot = scenes::warm_up(&scene).map_err(|_| "warm-up")?;
+                let mut planner = snapshot.clone();
+                let step = repeat(
+                    REPS,
+                    &mut planner,
+                    |p| p.clone_from(&snapshot),
+                    |p| {
+                        black_box(p.step(&scene.scenario).ok());
+                    },
+                );
+                let pairs = PhaseBench::new(&scene.scenario, &snapshot).active_pairs();
+                Ok((step, pairs))
+            });
+        match measured {
+            Ok((step, pairs)) => {
+                line("influence", inches, 8, "step", step);
+                line("influence", inches, 8, "active_pairs", pairs as u64 * 10);
+            }
+            Err(e) => hprintln!("M4F influence {} 8 error {}", inches, e),
         }
     }
     for n in SCALING_JOINTS {

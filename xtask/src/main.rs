@@ -127,14 +127,21 @@ fn bench(quick: bool) -> Result<()> {
             .args([
                 "test",
                 "-p",
-                "capp-link",
+                "capp-system-tests",
                 "--test",
-                "qemu_e2e",
+                "qemu_link",
                 "--",
                 "--nocapture",
             ])
             .output()
             .context("running the QEMU end-to-end test")?;
+        if !e2e.status.success() {
+            bail!(
+                "the QEMU end-to-end test (tests/qemu_link.rs) failed: {}\n{}",
+                e2e.status,
+                String::from_utf8_lossy(&e2e.stderr)
+            );
+        }
         let log = String::from_utf8_lossy(&e2e.stderr).into_owned()
             + &String::from_utf8_lossy(&e2e.stdout);
         Some(report::FirmwareSize::parse(&sizes, &log))

@@ -12,6 +12,8 @@ use crate::m4f::Counts;
 
 /// Obstacle counts of the PIPS tables (as `capp_bench::scenes::PIPS_OBSTACLES`, plus 64).
 pub const PIPS_OBSTACLES: [usize; 4] = [0, 8, 32, 64];
+/// Influence distances of the sweep, inches (as `capp_bench::scenes::INFLUENCE_SWEEP_IN`).
+pub const INFLUENCE_SWEEP_IN: [usize; 4] = [24, 12, 6, 3];
 /// The scaling sweep (as `capp_bench::scenes`).
 pub const SCALING_JOINTS: [usize; 5] = [6, 12, 18, 24, 32];
 /// The scaling sweep (as `capp_bench::scenes`).
@@ -395,6 +397,28 @@ pub fn tables(
         opt(host.get("pips/obstacles/8"), ns),
         opt(host.get("pips/obstacles/32"), ns),
     );
+    let _ = writeln!(w);
+
+    let _ = writeln!(
+        w,
+        "### What the influence distance costs (M4F, PIPS, 8 obstacles)"
+    );
+    let _ = writeln!(w);
+    let _ = writeln!(w, "The same scene with `avoidance.influence_distance` set smaller (24 in is the default); each run warmed up the same way, so the measured state differs a little. The 24 in row is the first table's 8-obstacle scene, timed from another call site in the counter: a few instructions apart.");
+    let _ = writeln!(w);
+    let _ = writeln!(
+        w,
+        "| influence distance | pairs within influence | M4F: step (instructions) |"
+    );
+    let _ = writeln!(w, "|---|---|---|");
+    for inches in INFLUENCE_SWEEP_IN {
+        let _ = writeln!(
+            w,
+            "| {inches} in | {} | {} |",
+            opt(counts.get("influence", inches, 8, "active_pairs"), grouped),
+            opt(counts.get("influence", inches, 8, "step"), grouped),
+        );
+    }
     let _ = writeln!(w);
 
     let _ = writeln!(w, "### Scaling: chains of n joints, m obstacles");

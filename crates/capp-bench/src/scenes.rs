@@ -200,8 +200,27 @@ fn scatter<const N: usize>(
     Ok(())
 }
 
+/// Influence distances (inches) of the sweep that shows what the setting
+/// costs: the default (24 in) and smaller ones (PIPS, 8 obstacles).
+pub const INFLUENCE_SWEEP_IN: [f32; 4] = [24.0, 12.0, 6.0, 3.0];
+
 /// PIPS from home toward the payload-bay target with `obstacles` obstacles (at most 64).
 pub fn pips(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    pips_with(obstacles, settings())
+}
+
+/// [`pips`] with the avoidance influence distance set to `influence_in` inches
+/// (the same obstacles: where they are placed does not depend on it).
+pub fn pips_with_influence(
+    obstacles: usize,
+    influence_in: f32,
+) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let mut s = settings();
+    s.avoidance.influence_distance = influence_in;
+    pips_with(obstacles, s)
+}
+
+fn pips_with(obstacles: usize, settings: Settings) -> Result<Scene<PIPS_JOINTS>, SceneError> {
     if obstacles > MAX_OBSTACLES {
         return Err(SceneError::Size);
     }
@@ -219,7 +238,7 @@ pub fn pips(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
         obstacles
     };
     scatter(&frames, BAY_TARGET.0, equipment, 0x5eed_0018, &mut list)?;
-    let mission = Mission::new(&[Waypoint::pose(BAY_TARGET.0, BAY_TARGET.1)], settings())
+    let mission = Mission::new(&[Waypoint::pose(BAY_TARGET.0, BAY_TARGET.1)], settings)
         .map_err(ScenarioError::Mission)?;
     let scenario = Scenario::new(robot, &list, &mission)?;
     Ok(Scene {
