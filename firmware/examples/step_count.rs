@@ -25,6 +25,7 @@ use capp_bench::scenes::{
     self, Scene, INFLUENCE_SWEEP_IN, PIPS_OBSTACLES, SCALING_JOINTS, SCALING_OBSTACLES,
 };
 use capp_bench::{Listing, PhaseBench};
+use capp_core::control::LawKind;
 use capp_core::{Planner, Scenario};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
@@ -229,23 +230,32 @@ fn measure<const N: usize>(
             },
         );
         line(name, n, m, "projection_integration", p);
-        // A run of consecutive steps: the mean and the worst along the path.
+        // A run of consecutive steps, to the end of the run or WINDOW steps:
+        // the mean and the worst along the path.
         planner.clone_from(&snapshot);
-        let mut halvings = 0u64;
-        let (mean, max) = count(
-            WINDOW,
-            overhead,
-            &mut planner,
-            |_| {},
-            |p| {
-                if let Ok(r) = p.step(sc) {
-                    halvings += r.halvings as u64;
-                }
-            },
-        );
-        line(name, n, m, "window_mean", mean);
-        line(name, n, m, "window_max", max * 10);
-        line(name, n, m, "window_halvings", halvings * 10);
+        let (mut halvings, mut steps, mut total, mut max) = (0u64, 0u64, 0u64, 0u64);
+        while steps < WINDOW as u64 && !planner.is_done() {
+            let (one, _) = count(
+                1,
+                overhead,
+                &mut planner,
+                |_| {},
+                |p| {
+                    if let Ok(r) = p.step(sc) {
+                        halvings += r.halvings as u64;
+                    }
+                },
+            );
+            steps += 1;
+            total += one;
+            max = max.max(one);
+        }
+        if let Some(mean) = total.checked_div(steps) {
+            line(name, n, m, "window_mean", mean);
+            line(name, n, m, "window_max", max);
+            line(name, n, m, "window_steps", steps * 10);
+            line(name, n, m, "window_halvings", halvings * 10);
+        }
     }
     if with_phases && m > 0 {
         pair_costs(name, scene, &snapshot);
@@ -357,6 +367,30 @@ fn main() -> ! {
                 }
             }
             Err(e) => hprintln!("M4F pips 18 {} error {:?}", k, e),
+        }
+    }
+    // What each law costs: one step of PIPS with 8 obstacles from the same
+    // warmed-up state (the default law's), `joints` = 18.
+    if let Ok(snapshot) = scenes::pips(8).and_then(|s| scenes::warm_up(&s)) {
+        for (law, kind) in [
+            ("law_damped_least_squares", LawKind::DampedLeastSquares),
+            ("law_gradient", LawKind::Gradient),
+            ("law_paper", LawKind::Paper),
+        ] {
+            let Ok(scene) = scenes::pips_with_law(8, kind) else {
+                hprintln!("M4F {} 18 8 error scene", law);
+                continue;
+            };
+            let mut planner = snapshot.clone();
+            let step = repeat(
+                REPS,
+                &mut planner,
+                |p| p.clone_from(&snapshot),
+                |p| {
+                    black_box(p.step(&scene.scenario).ok());
+                },
+            );
+            line(law, 18, 8, "step", step);
         }
     }
     // What the influence distance costs: PIPS with 8 obstacles, one line per

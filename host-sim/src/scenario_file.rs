@@ -159,6 +159,9 @@ struct SettingsSpec {
     link_margin: Option<f64>,
     points_per_link: Option<u8>,
     influence_distance: Option<f64>,
+    engage_clearance: Option<f64>,
+    advance_fraction: Option<f64>,
+    damping: Option<f64>,
     max_steps: Option<u32>,
     stall_window: Option<u32>,
     stall_progress: Option<f64>,
@@ -170,6 +173,8 @@ struct SettingsSpec {
 enum LawSpec {
     Gradient,
     Paper,
+    #[serde(rename = "damped_least_squares")]
+    DampedLeastSquares,
 }
 
 #[derive(Deserialize)]
@@ -474,8 +479,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         settings.law.kind = match law {
             LawSpec::Gradient => LawKind::Gradient,
             LawSpec::Paper => LawKind::Paper,
+            LawSpec::DampedLeastSquares => LawKind::DampedLeastSquares,
         };
     }
+    settings.law.damping = f(s.damping, settings.law.damping);
+    settings.avoidance.engage_clearance =
+        f(s.engage_clearance, settings.avoidance.engage_clearance);
+    settings.avoidance.advance_fraction =
+        f(s.advance_fraction, settings.avoidance.advance_fraction);
     settings.law.orientation_scale = f(s.orientation_scale, settings.law.orientation_scale);
     settings.law.approach_radius = f(s.approach_radius, settings.law.approach_radius);
     settings.avoidance.joint_margin = f(s.joint_margin, settings.avoidance.joint_margin);

@@ -273,12 +273,14 @@ fn derived_row(scenario: &CoreScenario, s: &capp_link::Setpoint, h: f32) -> Row 
     let target = &scenario.targets()[s.waypoint as usize];
     let error = pose_error(&frames, target, settings.law.orientation_scale);
     let mut mu = [0.0f32; MAX_JOINTS];
+    let mut distance = [0.0f32; MAX_JOINTS];
     let field = potential_gradient(
         robot,
         &frames,
         scenario.obstacles(),
         &settings.avoidance,
         &mut mu[..s.joints.len()],
+        &mut distance[..s.joints.len()],
     );
     let p = frames.end_position();
     let r = frames.end_rotation();

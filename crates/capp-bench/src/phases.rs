@@ -5,21 +5,23 @@
 //! | phase | capp-core calls |
 //! |---|---|
 //! | kinematics | `forward_kinematics` (one pass, eqs. 5-6) |
-//! | control law | `pose_error`, `lyapunov_terms`, `weighted_rate`, `descent_rate` (eqs. 11-18) |
+//! | control law | `pose_error`, then the scenario's law: `lyapunov_terms`, `weighted_rate`, `descent_rate` (first-order laws, eqs. 11-18), or `damped_rate` (damped least squares, its eq. 24 projection included) |
 //! | obstacles | `potential_gradient` (eqs. 20, 25-26) |
-//! | projection and integration | `strength`, `project`, `limit_rates` (eq. 24), the step bounds (`end_twist`, `column_sizes`), the clamped Euler update |
+//! | projection and integration | first-order laws: `strength`, `project`, `limit_rates` (eq. 24), the step bounds (`end_twist`, `column_sizes`); every law: conservative advancement (`step_size::advancement`) and the clamped Euler update |
 //!
 //! A step that takes its first step size (no halving) runs each phase once
 //! (the kinematics and obstacles on the candidate configuration); what the
 //! step costs beyond their sum is the state machine and copying.
 
 use capp_core::avoidance::{potential_gradient, ObstacleField};
+use capp_core::control::damped::{damped_rate, DampedWorkspace};
 use capp_core::control::{
-    descent_rate, lyapunov_terms, pose_error, weighted_rate, PoseError, Target,
+    descent_rate, lyapunov_terms, pose_error, weighted_rate, LawKind, PoseError, Target,
 };
 use capp_core::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use capp_core::math::dot_slice;
 use capp_core::projection::{limit_rates, project, strength};
+use capp_core::step_size::advancement;
 use capp_core::{Planner, Scenario};
 
 /// Everything the phases read and write, copied from a planner.
@@ -40,6 +42,8 @@ pub struct PhaseBench<const N: usize> {
     columns: [f32; N],
     locked: [bool; N],
     mu: [f32; N],
+    distance: [f32; N],
+    damped: DampedWorkspace<N>,
     field: ObstacleField,
 }
 
@@ -67,6 +71,8 @@ impl<const N: usize> PhaseBench<N> {
             columns: [0.0; N],
             locked: [false; N],
             mu: [0.0; N],
+            distance: [0.0; N],
+            damped: DampedWorkspace::default(),
             field: ObstacleField::default(),
         };
         bench.kinematics(scenario);
@@ -85,16 +91,38 @@ impl<const N: usize> PhaseBench<N> {
         self.frames.end_position().x
     }
 
-    /// Pose error, the four `J_i^T e_i` terms, the weighted rate and the
-    /// descent rate. Returns the descent rate.
+    /// Pose error and the scenario's law: for the first-order laws the four
+    /// `J_i^T e_i` terms, the weighted rate and the descent rate (returned);
+    /// for damped least squares its rate, projection included (returns the
+    /// time the step needs at the rate limits).
     pub fn control_law<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
     ) -> f32 {
         let robot = scenario.robot();
-        let law = &scenario.settings().law;
+        let settings = scenario.settings();
+        let law = &settings.law;
         let n = self.n;
         self.error = pose_error(&self.frames, &self.target, law.orientation_scale);
+        if law.kind == LawKind::DampedLeastSquares {
+            let engage = strength(
+                self.field.clearance.map(|c| c.value),
+                settings.avoidance.engage_clearance,
+            );
+            return damped_rate(
+                robot,
+                &self.frames,
+                &self.q[..n],
+                &self.error,
+                &self.mu[..n],
+                engage,
+                law,
+                settings.time_step_s,
+                &mut self.damped,
+                &mut self.rate[..n],
+            )
+            .time_at_limits_s;
+        }
         lyapunov_terms(robot, &self.frames, &self.error, &mut self.terms);
         weighted_rate(
             robot,
@@ -120,12 +148,14 @@ impl<const N: usize> PhaseBench<N> {
             scenario.obstacles(),
             &scenario.settings().avoidance,
             &mut self.mu,
+            &mut self.distance,
         );
         self.field.potential
     }
 
-    /// Projection, rate limits, the step-size bounds and the clamped Euler
-    /// update, from the law's rate. Returns the step size, seconds.
+    /// Projection, rate limits, the step-size bounds (first-order laws),
+    /// conservative advancement and the clamped Euler update, from the law's
+    /// rate. Returns the step size, seconds.
     pub fn projection_integration<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
@@ -134,6 +164,33 @@ impl<const N: usize> PhaseBench<N> {
         let settings = scenario.settings();
         let n = self.n;
         self.rate = self.law_rate;
+        let h = if settings.law.kind == LawKind::DampedLeastSquares {
+            settings.time_step_s
+        } else {
+            self.first_order_bounds(scenario)
+        };
+        let h = advancement(
+            robot,
+            &self.frames,
+            &self.distance[..n],
+            &self.rate[..n],
+            h,
+            settings.avoidance.advance_fraction,
+        );
+        for (j, joint) in robot.joints().iter().enumerate() {
+            self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
+        }
+        h
+    }
+
+    /// The first-order laws' projection, rate limits and step bounds.
+    fn first_order_bounds<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+    ) -> f32 {
+        let robot = scenario.robot();
+        let settings = scenario.settings();
+        let n = self.n;
         let engage = strength(
             self.field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
@@ -166,9 +223,6 @@ impl<const N: usize> PhaseBench<N> {
         let stiffness = dot_slice(&self.gain[..n], &self.columns[..n]);
         if stiffness > 0.0 {
             h = h.min(1.0 / stiffness);
-        }
-        for (j, joint) in robot.joints().iter().enumerate() {
-            self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
         }
         h
     }

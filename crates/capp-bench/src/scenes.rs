@@ -21,6 +21,7 @@
 //! configuration every figure is measured at.
 
 use capp_core::avoidance::points;
+use capp_core::control::LawKind;
 use capp_core::kinematics::{forward_kinematics, Frames};
 use capp_core::math::Vec3;
 use capp_core::obstacle::Obstacle;
@@ -36,7 +37,7 @@ pub const MAX_CHAIN_JOINTS: usize = 32;
 /// PIPS joints.
 pub const PIPS_JOINTS: usize = pips::JOINTS;
 /// Planner steps taken from the start before anything is measured.
-pub const WARM_UP_STEPS: u32 = 50;
+pub const WARM_UP_STEPS: u32 = 10;
 /// Obstacle counts of the PIPS figures.
 pub const PIPS_OBSTACLES: [usize; 3] = [0, 8, 32];
 /// Joint counts of the scaling sweep.
@@ -217,6 +218,13 @@ pub fn pips_with_influence(
 ) -> Result<Scene<PIPS_JOINTS>, SceneError> {
     let mut s = settings();
     s.avoidance.influence_distance = influence_in;
+    pips_with(obstacles, s)
+}
+
+/// [`pips`] driven by the law `kind` (the same obstacles).
+pub fn pips_with_law(obstacles: usize, kind: LawKind) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let mut s = settings();
+    s.law.kind = kind;
     pips_with(obstacles, s)
 }
 

@@ -75,12 +75,14 @@ fn listing_differences_match_the_exact_products() {
     // Obstacle gradient: differences of the powf potential against the exact
     // mu (f32 differences of a steep potential: a few per cent).
     let mut mu = [0.0; 18];
+    let mut distance = [0.0; 18];
     capp_core::avoidance::potential_gradient(
         scenario.robot(),
         frames,
         scenario.obstacles(),
         &scenario.settings().avoidance,
         &mut mu,
+        &mut distance,
     );
     let scale = mu.iter().fold(0.0f32, |a, m| a.max(m.abs()));
     for (j, (fd, exact)) in listing.obstacle_gradient().iter().zip(&mu).enumerate() {

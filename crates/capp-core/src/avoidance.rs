@@ -42,6 +42,10 @@ pub struct AvoidanceSettings {
     /// `C - 1` of the closest pair below which the approaching motion is
     /// removed in full (see [`crate::projection`]); 0 gives the paper's rule.
     pub engage_clearance: f32,
+    /// Conservative advancement, in `(0, 1]`: no avoidance point may travel
+    /// in one step more than this fraction of its distance to the nearest
+    /// inflated obstacle (see [`crate::step_size::advancement`]).
+    pub advance_fraction: f32,
 }
 
 impl AvoidanceSettings {
@@ -54,6 +58,7 @@ impl AvoidanceSettings {
             points_per_link: 1,
             influence_distance: 24.0,
             engage_clearance: 1.0,
+            advance_fraction: 0.5,
         }
     }
 
@@ -152,13 +157,18 @@ pub struct ObstacleField {
     pub clear: bool,
 }
 
-/// Evaluates the potential and writes `mu = dP/dq` into `mu` (`frames.len()` values).
+/// Evaluates the potential and writes `mu = dP/dq` into `mu` (`frames.len()`
+/// values) and, per link, a lower bound on the distance from any of its
+/// avoidance points to any inflated obstacle into `distance` (length units;
+/// the influence distance when no obstacle is within it; see
+/// [`crate::obstacle::Contact::distance_sq`]).
 pub fn potential_gradient<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
     obstacles: &[Obstacle],
     settings: &AvoidanceSettings,
     mu: &mut [f32],
+    distance: &mut [f32],
 ) -> ObstacleField {
     let mut field = ObstacleField {
         clear: true,
@@ -166,18 +176,31 @@ pub fn potential_gradient<const N: usize>(
     };
     let mut force = Vec3::zeros();
     let mut moment = Vec3::zeros();
-    let n = frames.len().min(mu.len());
+    let n = frames.len().min(mu.len()).min(distance.len());
+    // Nothing to hit: no bound. Otherwise a link no obstacle is near is at
+    // least the influence distance from all of them.
+    let influence_sq = if obstacles.is_empty() {
+        f32::INFINITY
+    } else {
+        settings.influence_distance * settings.influence_distance
+    };
     for j in (0..n).rev() {
         let pivot = frames.pivot(j);
         moment += (frames.origin(j) - pivot).cross(&force);
         let beyond = force;
         let mut sliding_force = Vec3::zeros();
+        let mut link_distance_sq = influence_sq;
         for point in link_points(frames, settings, j) {
             let mut f = Vec3::zeros();
             for (index, obstacle) in obstacles.iter().enumerate() {
                 let Some(contact) = obstacle.contact(&point.position, point.kind) else {
                     continue;
                 };
+                link_distance_sq = link_distance_sq.min(contact.distance_sq);
+                if contact.clearance == f32::INFINITY {
+                    // Beyond the potential's cut-off: only the distance counts.
+                    continue;
+                }
                 field.active_pairs = field.active_pairs.saturating_add(1);
                 if field.clearance.is_none_or(|c| contact.clearance < c.value) {
                     field.clearance = Some(Clearance {
@@ -198,6 +221,7 @@ pub fn potential_gradient<const N: usize>(
             moment += (point.position - pivot).cross(&f);
             sliding_force += f * point.t;
         }
+        distance[j] = libm::sqrtf(link_distance_sq);
         let z = frames.axis(j);
         // `get`, not `[j]`: no panic path (the frames are the robot's, so it is always `Some`).
         mu[j] = match robot.joints().get(j).map(|joint| joint.kind) {

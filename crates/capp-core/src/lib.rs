@@ -50,6 +50,7 @@ extern crate std;
 pub mod avoidance;
 pub mod control;
 pub mod kinematics;
+pub mod linalg;
 pub mod math;
 pub mod mission;
 pub mod obstacle;
@@ -59,6 +60,7 @@ pub mod projection;
 pub mod robot;
 pub mod scenario;
 pub mod setpoint;
+pub mod step_size;
 
 pub use mission::{Mission, MissionError, Settings, Waypoint};
 pub use obstacle::{ObstacleError, SuperEllipsoid};

@@ -10,6 +10,7 @@
 
 use crate::avoidance::AvoidanceSettings;
 use crate::control::LawSettings;
+use crate::robot::Robot;
 
 /// A point to pass through, or the final target.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -88,6 +89,46 @@ impl Default for Settings {
     }
 }
 
+impl Settings {
+    /// The defaults for a robot whose characteristic length is
+    /// `characteristic_length` (length units): [`Settings::default`]'s
+    /// lengths (sized for PIPS in inches, whose reach is
+    /// [`reference_length`]) scaled by `characteristic_length /
+    /// reference_length()`. Every other default is a time, a count or a ratio,
+    /// so a robot and its copy in other units get the same settings in their
+    /// own units, and plan the same motion.
+    pub fn relative_to(characteristic_length: f32) -> Self {
+        Settings::default().scaled(characteristic_length / reference_length())
+    }
+
+    /// The defaults relative to `robot`'s reach ([`Robot::reach`]).
+    pub fn for_robot<const N: usize>(robot: &Robot<N>) -> Self {
+        Settings::relative_to(robot.reach())
+    }
+
+    /// These settings with every length multiplied by `k` (`k = 1` changes
+    /// nothing, to the bit): tolerance, radii, the orientation scale, margins
+    /// and the influence distance.
+    pub fn scaled(mut self, k: f32) -> Self {
+        if k != 1.0 {
+            self.fine_radius *= k;
+            self.position_tolerance *= k;
+            self.law.orientation_scale *= k;
+            self.law.approach_radius *= k;
+            self.avoidance.joint_margin *= k;
+            self.avoidance.link_margin *= k;
+            self.avoidance.influence_distance *= k;
+        }
+        self
+    }
+}
+
+/// The characteristic length [`Settings::default`] is sized for: the reach of
+/// PIPS in inches (about 248 in; [`crate::pips`]).
+pub fn reference_length() -> f32 {
+    crate::pips::robot::<{ crate::pips::JOINTS }>().map_or(1.0, |r| r.reach())
+}
+
 /// Which setting an error is about.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -114,6 +155,10 @@ pub enum SettingsField {
     InfluenceDistance,
     /// `avoidance.engage_clearance`
     EngageClearance,
+    /// `avoidance.advance_fraction`
+    AdvanceFraction,
+    /// `law.damping`
+    Damping,
     /// `max_steps`
     MaxSteps,
     /// `stall_window`
@@ -141,8 +186,10 @@ impl core::fmt::Display for SettingsField {
             SettingsField::Margin => "margins must be non-negative and at most 1e4",
             SettingsField::PointsPerLink => "points_per_link must be 1 to 8",
             SettingsField::InfluenceDistance => {
-                "influence_distance must be non-negative and at most 1e4"
+                "influence_distance must be positive and at most 1e4"
             }
+            SettingsField::AdvanceFraction => "advance_fraction must be in (0, 1]",
+            SettingsField::Damping => "damping must be positive and at most 1",
             SettingsField::EngageClearance => {
                 "engage_clearance must be non-negative and at most 1e6"
             }
@@ -236,9 +283,17 @@ impl Settings {
                 F::PointsPerLink,
             ),
             (
-                non_negative(self.avoidance.influence_distance)
+                positive(self.avoidance.influence_distance)
                     && self.avoidance.influence_distance <= 1e4,
                 F::InfluenceDistance,
+            ),
+            (
+                positive(self.avoidance.advance_fraction) && self.avoidance.advance_fraction <= 1.0,
+                F::AdvanceFraction,
+            ),
+            (
+                positive(self.law.damping) && self.law.damping <= 1.0,
+                F::Damping,
             ),
             (
                 non_negative(self.avoidance.engage_clearance)

@@ -238,13 +238,24 @@ fn powi_loop(mut u: f32, mut k: u8) -> f32 {
     acc
 }
 
-/// `C - 1` and `grad_p C` (world frame) at one avoidance point.
+/// `C - 1`, `grad_p C` (world frame) and a distance bound at one avoidance point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Contact {
-    /// `C(p) - 1` of the inflated obstacle: positive outside, 0 on its surface.
+    /// `C(p) - 1` of the inflated obstacle: positive outside, 0 on its
+    /// surface; `+inf` when `C` is beyond [`C_CUTOFF`] (the pair is then out
+    /// of the potential's influence, and `gradient` is zero).
     pub clearance: f32,
     /// Gradient of `C` with respect to the world point `p`, per length unit.
     pub gradient: Vec3,
+    /// Square of a lower bound on the Euclidean distance from `p` to the
+    /// inflated surface (0 inside), length units squared. The larger of two
+    /// bounds that hold for every exponent `>= 1`:
+    ///
+    /// * `(C - 1) / |grad C|`: `C` is convex, so on the surface (`C = 1`)
+    ///   `1 >= C(p) + grad C . (y - p)`, hence `|y - p| >= (C - 1) / |grad C|`;
+    /// * the distance to the box `|x_i| <= semi-axis_i + margin`, which
+    ///   holds the inflated super-ellipsoid.
+    pub distance_sq: f32,
 }
 
 /// A validated obstacle with everything a step needs precomputed.
@@ -259,6 +270,8 @@ pub struct Obstacle {
     /// Whether `R` is the identity (no Euler angles): the rotations are skipped.
     aligned: bool,
     exponents: [Exponent; 3],
+    /// Per [`PointKind`]: `semi-axis + margin`.
+    axes: [Vec3; 2],
     /// Per [`PointKind`]: `1 / (semi-axis + margin)`.
     inv_axes: [Vec3; 2],
     /// Per [`PointKind`]: half-extents of the influence box, `semi-axis + margin + influence`.
@@ -311,7 +324,8 @@ impl Obstacle {
         let rotation = rotation_123(rx, ry, rz);
         let axes = vec3(s.semi_axes);
         let inflate = |margin: f32| axes.add_scalar(margin);
-        let inv_axes = margins.map(|m| inflate(m).map(|x| 1.0 / x));
+        let inflated = margins.map(inflate);
+        let inv_axes = inflated.map(|a| a.map(|x| 1.0 / x));
         let reach = margins.map(|m| inflate(m).add_scalar(influence));
         let reach_sq = reach.map(|r| r.dot(&r));
         Ok(Obstacle {
@@ -321,6 +335,7 @@ impl Obstacle {
             rotation_t: rotation.transpose(),
             aligned: s.euler_123 == [0.0; 3],
             exponents: s.exponents.map(Exponent::new),
+            axes: inflated,
             inv_axes,
             reach,
             reach_sq,
@@ -342,8 +357,9 @@ impl Obstacle {
         &self.rotation
     }
 
-    /// `C(p) - 1` and its gradient for a point of `kind`, or `None` when the
-    /// point is outside the influence region (then `C > 1` is guaranteed).
+    /// `C(p) - 1`, its gradient and a distance bound for a point of `kind`, or
+    /// `None` when the point is outside the influence region (then it is at
+    /// least the influence distance from the inflated surface).
     // Always inlined: most pairs end at the sphere test, which then costs a
     // dozen instructions instead of a call.
     #[inline(always)]
@@ -360,8 +376,10 @@ impl Obstacle {
             return None;
         }
         let inv = &self.inv_axes[k];
+        let axes = &self.axes[k];
         let mut c = 0.0;
         let mut local_gradient = Vec3::zeros();
+        let mut box_sq = 0.0;
         for axis in 0..3 {
             let u = x[axis].abs() * inv[axis];
             let (term, slope) = self.exponents[axis].power_and_slope(u);
@@ -375,16 +393,36 @@ impl Obstacle {
                 0.0
             };
             local_gradient[axis] = slope * inv[axis] * sign;
+            let outside = (x[axis].abs() - axes[axis]).max(0.0);
+            box_sq += outside * outside;
         }
         if c > C_CUTOFF || c.is_nan() {
-            return None;
+            return Some(Contact {
+                clearance: f32::INFINITY,
+                gradient: Vec3::zeros(),
+                distance_sq: box_sq,
+            });
         }
+        let clearance = c - 1.0;
+        let slope_sq = local_gradient.dot(&local_gradient);
+        let convex_sq = if clearance <= 0.0 {
+            0.0
+        } else if slope_sq > 0.0 {
+            clearance * clearance / slope_sq
+        } else {
+            box_sq
+        };
         Some(Contact {
-            clearance: c - 1.0,
+            clearance,
             gradient: if self.aligned {
                 local_gradient
             } else {
                 self.rotation * local_gradient
+            },
+            distance_sq: if clearance <= 0.0 {
+                0.0
+            } else {
+                convex_sq.max(box_sq)
             },
         })
     }
@@ -483,10 +521,75 @@ mod tests {
             [0.0; 3],
         ] {
             if let Some(c) = o.contact(&vec3(p), PointKind::Link) {
-                assert!(c.clearance.is_finite() && c.gradient.iter().all(|g| g.is_finite()));
+                assert!(!c.clearance.is_nan() && c.gradient.iter().all(|g| g.is_finite()));
+                assert!(!c.distance_sq.is_nan());
             }
             assert!(!o.clearance_uncut(&vec3(p), PointKind::Link).is_nan());
         }
+    }
+
+    /// Reproducible uniform numbers in [-1, 1).
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn distance_bound_never_exceeds_the_distance_and_is_tight_at_a_face() {
+        // For points around obstacles of every shape, every point within the
+        // bound of p is outside the inflated obstacle (C > 1): the bound is
+        // a true lower bound on the distance.
+        let mut rng = 7u64;
+        for exponents in [
+            [1.0, 1.0, 1.0],
+            [2.0; 3],
+            [8.0, 2.0, 2.0],
+            [2.5, 8.0, 3.0],
+            [32.0; 3],
+        ] {
+            let s = SuperEllipsoid {
+                centre: [1.0, -2.0, 0.5],
+                semi_axes: [3.0, 1.0, 2.0],
+                exponents,
+                euler_123: [0.3, -0.2, 0.9],
+            };
+            let o = Obstacle::new(0, &s, [0.5, 0.25], 20.0).unwrap();
+            for _ in 0..200 {
+                let p = o.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 9.0;
+                let Some(c) = o.contact(&p, PointKind::Joint) else {
+                    continue;
+                };
+                if c.clearance <= 0.0 {
+                    assert_eq!(c.distance_sq, 0.0);
+                    continue;
+                }
+                let d = c.distance_sq.sqrt();
+                for _ in 0..200 {
+                    let dir = vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]);
+                    let len = dir.norm();
+                    if len == 0.0 {
+                        continue;
+                    }
+                    let y = p + dir * (0.999 * d * lcg(&mut rng).abs() / len);
+                    assert!(
+                        o.clearance_uncut(&y, PointKind::Joint) > -1e-5,
+                        "k={exponents:?} p={p:?} bound {d} reaches inside"
+                    );
+                }
+            }
+        }
+        // A box face: the bound is the distance itself.
+        let o = Obstacle::new(
+            0,
+            &SuperEllipsoid::aligned([0.0; 3], [2.0; 3], 8.0),
+            [1.0, 1.0],
+            10.0,
+        )
+        .unwrap();
+        let c = o.contact(&vec3([4.5, 0.0, 0.0]), PointKind::Joint).unwrap();
+        assert!((c.distance_sq.sqrt() - 1.5).abs() < 1e-4, "{c:?}");
     }
 
     #[test]

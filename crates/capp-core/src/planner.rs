@@ -27,17 +27,17 @@
 //! halving. Nothing allocates; the planner is a fixed-size value.
 
 use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
+use crate::control::damped::{damped_rate, DampedWorkspace};
 use crate::control::{
-    descent_rate, lyapunov_terms, pose_error, weighted_rate, Drive, PoseError, Target,
+    descent_rate, lyapunov_terms, pose_error, weighted_rate, Drive, LawKind, PoseError, Target,
 };
 use crate::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use crate::math::{all_finite, dot_slice};
+use crate::mission::Settings;
 use crate::projection::{limit_rates, project, strength};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
-
-/// Fraction of the Gauss-Newton step taken (see `step`).
-pub const STEP_FRACTION: f32 = 0.5;
+use crate::step_size::{self, advancement};
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -158,6 +158,8 @@ struct Evaluation<const N: usize> {
     frames: Frames<N>,
     error: PoseError,
     mu: [f32; N],
+    /// Per link, a lower bound on its points' distance to any inflated obstacle.
+    distance: [f32; N],
     field: ObstacleField,
 }
 
@@ -167,6 +169,7 @@ impl<const N: usize> Evaluation<N> {
             frames: Frames::default(),
             error: PoseError::default(),
             mu: [0.0; N],
+            distance: [0.0; N],
             field: ObstacleField::default(),
         }
     }
@@ -190,6 +193,7 @@ impl<const N: usize> Evaluation<N> {
             scenario.obstacles(),
             &scenario.settings().avoidance,
             &mut self.mu,
+            &mut self.distance,
         );
     }
 }
@@ -211,6 +215,7 @@ pub struct Planner<const N: usize> {
     /// Weighted squared Jacobian column sizes (for the step bound).
     columns: [f32; N],
     locked: [bool; N],
+    damped: DampedWorkspace<N>,
     step: u32,
     phase: Phase,
     /// Position error change over the last step (the listing's `error_step`).
@@ -255,6 +260,7 @@ impl<const N: usize> Planner<N> {
             gain: [0.0; N],
             columns: [0.0; N],
             locked: [false; N],
+            damped: DampedWorkspace::default(),
             step: 0,
             phase: Phase::Moving { waypoint: 0 },
             error_step: 0.0,
@@ -372,6 +378,61 @@ impl<const N: usize> Planner<N> {
         }
     }
 
+    /// The first-order laws (gradient, eq. 15): rate from eqs. 13-18, the
+    /// Euclidean one-sided projection (eq. 24), the rate limits, and the
+    /// listing's step with its descent and stiffness bounds. Returns the
+    /// drive, whether the projection constrained it, and the step `h`.
+    fn first_order(
+        &mut self,
+        robot: &Robot<N>,
+        settings: &Settings,
+        engage: f32,
+    ) -> (Drive, bool, f32) {
+        let n = self.n.min(N);
+        lyapunov_terms(robot, &self.now.frames, &self.now.error, &mut self.terms);
+        let drive = weighted_rate(
+            robot,
+            &self.q[..n],
+            &self.now.error,
+            &self.terms,
+            &settings.law,
+            &mut self.drive,
+            &mut self.rate,
+            &mut self.gain,
+        );
+        let constrained = project(
+            robot,
+            &self.q[..n],
+            &self.now.mu[..n],
+            engage,
+            &mut self.rate[..n],
+            &mut self.locked[..n],
+        );
+        limit_rates(robot, &mut self.rate[..n]);
+        if !all_finite(&self.rate[..n]) {
+            self.rate[..n].fill(0.0);
+        }
+        let mut h = step_size::listing(settings, &self.now.error, self.error_step);
+        let descent = descent_rate(&self.terms, &settings.law, &self.rate[..n]);
+        if descent > 0.0 {
+            let twist = end_twist(robot, &self.now.frames, &self.rate[..n]);
+            h = h.min(step_size::descent_bound(
+                descent,
+                twist,
+                settings.law.orientation_scale,
+            ));
+        }
+        column_sizes(
+            robot,
+            &self.now.frames,
+            settings.law.orientation_scale,
+            &mut self.columns[..n],
+        );
+        let stiffness = dot_slice(&self.gain[..n], &self.columns[..n]);
+        h = h.min(step_size::stiffness_bound(stiffness));
+        (drive, constrained, h)
+    }
+
     /// Takes one planning step. Returns the report; a finished planner returns
     /// its final report again without moving.
     pub fn step<const M: usize, const W: usize>(
@@ -402,75 +463,42 @@ impl<const N: usize> Planner<N> {
             return Ok(self.last);
         }
 
-        // Rates (eqs. 13-15, 18, 24).
-        lyapunov_terms(robot, &self.now.frames, &self.now.error, &mut self.terms);
-        let drive = weighted_rate(
-            robot,
-            &self.q[..n],
-            &self.now.error,
-            &self.terms,
-            &settings.law,
-            &mut self.drive,
-            &mut self.rate,
-            &mut self.gain,
-        );
+        // The law proposes a rate and a step (eqs. 13-18, 24).
         let engage = strength(
             self.now.field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
         );
-        let constrained = project(
-            robot,
-            &self.q[..n],
-            &self.now.mu[..n],
-            engage,
-            &mut self.rate[..n],
-            &mut self.locked[..n],
-        );
-        limit_rates(robot, &mut self.rate[..n]);
+        let (drive, constrained, mut h) = match settings.law.kind {
+            LawKind::Gradient | LawKind::Paper => self.first_order(robot, &settings, engage),
+            LawKind::DampedLeastSquares => {
+                let step = damped_rate(
+                    robot,
+                    &self.now.frames,
+                    &self.q[..n],
+                    &self.now.error,
+                    &self.now.mu[..n],
+                    engage,
+                    &settings.law,
+                    settings.time_step_s,
+                    &mut self.damped,
+                    &mut self.rate[..n],
+                );
+                (step.drive, step.constrained, settings.time_step_s)
+            }
+        };
         if !all_finite(&self.rate[..n]) {
             self.rate[..n].fill(0.0);
         }
-
-        // Step size: the listing's rule.
-        let h_max = settings.time_step_s;
         let err = self.now.error.position;
-        let mut h = if err > settings.fine_radius {
-            if err > self.error_step.abs() {
-                h_max
-            } else {
-                (err / self.error_step).abs() * h_max
-            }
-        } else {
-            settings.fine_step_fraction * h_max
-        };
-        // And never predict removing more than all of V in one step: to first
-        // order V(h) = V - h G.qdot, and past h = V / G.qdot the step overshoots.
-        let descent = descent_rate(&self.terms, &settings.law, &self.rate[..n]);
-        if descent > 0.0 {
-            // Gauss-Newton step along the rate: V(h) ~ 1/2 |e - h J qdot|^2 is
-            // least at h = G.qdot / |J qdot|^2 (orientation rows weighted by
-            // lambda^2; sum_i |w x u_i|^2 = 2 |w|^2 for an orthonormal frame).
-            let (v, w) = end_twist(robot, &self.now.frames, &self.rate[..n]);
-            let lambda = settings.law.orientation_scale;
-            let speed_sq = v.dot(&v) + 2.0 * lambda * lambda * w.dot(&w);
-            if speed_sq > 0.0 {
-                h = h.min(STEP_FRACTION * descent / speed_sq);
-            }
-        }
-        // No mode of the linearised error may overshoot: with rate = gain o G,
-        // e' = -J diag(gain) J^T e, whose largest eigenvalue is at most the
-        // trace sum_j gain_j |J_j|^2. Keeping h below its inverse makes every
-        // mode decay without changing sign, so the rates do not chatter.
-        column_sizes(
+        // No point may travel farther than a fraction of its clearance.
+        h = advancement(
             robot,
             &self.now.frames,
-            settings.law.orientation_scale,
-            &mut self.columns[..n],
+            &self.now.distance[..n],
+            &self.rate[..n],
+            h,
+            settings.avoidance.advance_fraction,
         );
-        let stiffness = dot_slice(&self.gain[..n], &self.columns[..n]);
-        if stiffness > 0.0 {
-            h = h.min(1.0 / stiffness);
-        }
 
         // Integrate, evaluate, accept or halve.
         let mut halvings = 0;

@@ -232,6 +232,11 @@ pub(crate) struct LinkConstants {
     /// `cos theta`, `sin theta` of a prismatic joint (unused for revolute).
     pub(crate) cos_theta: f32,
     pub(crate) sin_theta: f32,
+    /// Length of the chain from the base to the end of this link (`o_{j+1}`),
+    /// prismatic links at their longest: an upper bound, in every
+    /// configuration, on the distance between any two points of the arm up to
+    /// this link (length units).
+    pub(crate) chain: f32,
 }
 
 /// A validated serial chain of at most `N` joints. Immutable once built.
@@ -258,6 +263,7 @@ impl<const N: usize> Robot<N> {
         }
         let mut out = heapless::Vec::new();
         let mut links = [LinkConstants::default(); N];
+        let mut chain = 0.0f32;
         for (i, (j, link)) in joints.iter().zip(links.iter_mut()).enumerate() {
             let joint = i as u8;
             let fields = [
@@ -299,11 +305,18 @@ impl<const N: usize> Robot<N> {
             }
             let (sin_alpha, cos_alpha) = libm::sincosf(j.alpha);
             let (sin_theta, cos_theta) = libm::sincosf(j.theta);
+            // The link from o_j to o_{j+1} is `d z + a x`: |.| = sqrt(a^2 + d^2).
+            let d = match j.kind {
+                JointKind::Revolute => j.d.abs(),
+                JointKind::Prismatic => j.min.abs().max(j.max.abs()),
+            };
+            chain += libm::sqrtf(j.a * j.a + d * d);
             *link = LinkConstants {
                 cos_alpha,
                 sin_alpha,
                 cos_theta,
                 sin_theta,
+                chain,
             };
             // Capacity was checked above, so the push cannot fail.
             let _ = out.push(*j);
@@ -334,6 +347,17 @@ impl<const N: usize> Robot<N> {
     #[inline]
     pub(crate) fn links(&self) -> &[LinkConstants] {
         &self.links[..self.len()]
+    }
+
+    /// The robot's reach, length units: the length of the whole chain, every
+    /// prismatic joint at its longest. No point of the arm is ever farther
+    /// than this from the base. It is the robot's characteristic length: the
+    /// planner's length-valued defaults are fractions of it
+    /// ([`crate::Settings::for_robot`]), so they mean the same for a robot
+    /// described in inches or in metres.
+    #[inline]
+    pub fn reach(&self) -> f32 {
+        self.links().last().map_or(0.0, |l| l.chain)
     }
 
     /// The first joint whose value in `q` is outside its limits, or not finite.

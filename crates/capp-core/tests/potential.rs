@@ -41,6 +41,7 @@ fn potential_gradient_matches_central_differences() {
                 points_per_link: interior,
                 influence_distance: 1.0e4, // every pair: P is smooth
                 engage_clearance: 1.0,
+                advance_fraction: 0.5,
             };
             let mut trials = 0;
             while trials < 15 {
@@ -69,8 +70,15 @@ fn potential_gradient_matches_central_differences() {
                     })
                     .collect();
                 forward_kinematics(&robot, &q, &mut frames);
-                let field =
-                    potential_gradient(&robot, &frames, &validated, &settings, &mut mu[..n]);
+                let mut distance = [0.0f32; 32];
+                let field = potential_gradient(
+                    &robot,
+                    &frames,
+                    &validated,
+                    &settings,
+                    &mut mu[..n],
+                    &mut distance[..n],
+                );
                 assert!(field.clear);
                 let p64 = potential64(&joints, &q64, &obstacles, margins, interior as usize);
                 assert!(

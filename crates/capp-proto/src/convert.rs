@@ -109,6 +109,7 @@ impl From<capp_core::Settings> for Settings {
             law: match s.law.kind {
                 CoreLaw::Gradient => LawKind::Gradient,
                 CoreLaw::Paper => LawKind::Paper,
+                CoreLaw::DampedLeastSquares => LawKind::DampedLeastSquares,
             },
             orientation_scale: s.law.orientation_scale,
             approach_radius: s.law.approach_radius,
@@ -117,6 +118,8 @@ impl From<capp_core::Settings> for Settings {
             points_per_link: s.avoidance.points_per_link,
             influence_distance: s.avoidance.influence_distance,
             engage_clearance: s.avoidance.engage_clearance,
+            advance_fraction: s.avoidance.advance_fraction,
+            damping: s.law.damping,
             max_steps: s.max_steps,
             stall_window: s.stall_window,
             stall_progress: s.stall_progress,
@@ -137,9 +140,11 @@ impl From<Settings> for capp_core::Settings {
                 kind: match s.law {
                     LawKind::Gradient => CoreLaw::Gradient,
                     LawKind::Paper => CoreLaw::Paper,
+                    LawKind::DampedLeastSquares => CoreLaw::DampedLeastSquares,
                 },
                 orientation_scale: s.orientation_scale,
                 approach_radius: s.approach_radius,
+                damping: s.damping,
             },
             avoidance: AvoidanceSettings {
                 joint_margin: s.joint_margin,
@@ -147,6 +152,7 @@ impl From<Settings> for capp_core::Settings {
                 points_per_link: s.points_per_link,
                 influence_distance: s.influence_distance,
                 engage_clearance: s.engage_clearance,
+                advance_fraction: s.advance_fraction,
             },
             max_steps: s.max_steps,
             stall_window: s.stall_window,

@@ -37,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 2;
+pub const VERSION: u8 = 3;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -119,6 +119,8 @@ pub enum LawKind {
     Gradient,
     /// Eq. 15 as printed.
     Paper,
+    /// Damped least squares on `V` (capp-core's `control::damped`).
+    DampedLeastSquares,
 }
 
 /// Every planner setting (capp-core's `Settings`, flattened).
@@ -151,6 +153,10 @@ pub struct Settings {
     pub influence_distance: f32,
     /// Clearance `C - 1` below which approaching motion is removed in full.
     pub engage_clearance: f32,
+    /// Conservative advancement fraction (protocol 3).
+    pub advance_fraction: f32,
+    /// Damping floor of the damped least-squares law (protocol 3).
+    pub damping: f32,
     /// Iteration cap.
     pub max_steps: u32,
     /// Stall window, steps.

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 02 00 01, CRC-32 0x8bc23dea (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 03 00 01, CRC-32 0x8a0057dd (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x02, 0x06, 0x01, 0xea, 0x3d, 0xc2, 0x8b, 0x00]
+        &[0x02, 0x03, 0x04, 0x01, 0xdd, 0x57, 0x02, 0x8a, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x02, 0x01, 0x08, 0x0f, 0xb4, 0x05, 0xeb, 0x00]
+        &[0x08, 0x03, 0x01, 0x08, 0x38, 0xde, 0xc7, 0xea, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x02, 0x02, 0xff, 0x01, 0xff, 0xd7, 0x86, 0x6a, 0x9c, 0x00]
+        &[0x0a, 0x03, 0x02, 0xff, 0x01, 0xff, 0x67, 0xaf, 0x0a, 0xa1, 0x00]
     );
 }
 
@@ -166,7 +166,7 @@ fn every_command_is_pinned() {
         fine_step_fraction: 0.25,
         position_tolerance: 0.1,
         orientation_tolerance: 0.05,
-        law: LawKind::Gradient,
+        law: LawKind::DampedLeastSquares,
         orientation_scale: 10.0,
         approach_radius: 2.0,
         joint_margin: 6.0,
@@ -174,6 +174,8 @@ fn every_command_is_pinned() {
         points_per_link: 1,
         influence_distance: 24.0,
         engage_clearance: 1.0,
+        advance_fraction: 0.5,
+        damping: 1.0e-3,
         max_steps: 20_000,
         stall_window: 400,
         stall_progress: 0.01,
@@ -188,7 +190,7 @@ fn every_command_is_pinned() {
             0x00, 0x00, 0x80, 0x3E, // 0.25
             0xCD, 0xCC, 0xCC, 0x3D, // 0.1
             0xCD, 0xCC, 0x4C, 0x3D, // 0.05
-            0x00, // Gradient
+            0x02, // DampedLeastSquares
             0x00, 0x00, 0x20, 0x41, // 10.0
             0x00, 0x00, 0x00, 0x40, // 2.0
             0x00, 0x00, 0xC0, 0x40, // 6.0
@@ -196,6 +198,8 @@ fn every_command_is_pinned() {
             0x01, // points_per_link
             0x00, 0x00, 0xC0, 0x41, // 24.0
             0x00, 0x00, 0x80, 0x3F, // 1.0
+            0x00, 0x00, 0x00, 0x3F, // 0.5
+            0x6F, 0x12, 0x83, 0x3A, // 0.001
             0xA0, 0x9C, 0x01, // 20000
             0x90, 0x03, // 400
             0x0A, 0xD7, 0x23, 0x3C, // 0.01
@@ -248,7 +252,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x02, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x03, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [

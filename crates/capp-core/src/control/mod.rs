@@ -36,6 +36,8 @@
 //! so a joint driven toward a limit slows to zero at it and one driven away
 //! may move at up to `2 k_i <= qdot_max_i`.
 
+pub mod damped;
+
 use crate::kinematics::{end_direction_error, end_point_force, Frames};
 use crate::math::{dot_slice, norm_slice, Mat3, Vec3};
 use crate::robot::{Joint, Robot};
@@ -101,6 +103,10 @@ pub enum LawKind {
     /// Where the terms disagree their unit vectors can cancel while `V > 0`
     /// (an equilibrium eq. 16 hides); kept as the paper's baseline.
     Paper,
+    /// Damped least squares (Levenberg-Marquardt) on `V`, in the joint metric
+    /// of the rate limits and eq. 18, moving at the joints' speed: see
+    /// [`damped`].
+    DampedLeastSquares,
 }
 
 /// Weights of the law's terms.
@@ -114,16 +120,21 @@ pub struct LawSettings {
     /// as one length unit of position error. `lambda = 1` is eq. 12 exactly.
     pub orientation_scale: f32,
     /// Error (length units, `sqrt(2 V)`) below which the drive shrinks in
-    /// proportion to it: the smooth approach.
+    /// proportion to it: the smooth approach (first-order laws).
     pub approach_radius: f32,
+    /// Damping floor `b` of the damped least-squares law, dimensionless: the
+    /// damping is `(b + V / L^2)` times the mean eigenvalue of `J M J^T`
+    /// (see [`damped`]), so task directions weaker than that are damped.
+    pub damping: f32,
 }
 
 impl Default for LawSettings {
     fn default() -> Self {
         LawSettings {
-            kind: LawKind::Gradient,
+            kind: LawKind::DampedLeastSquares,
             orientation_scale: 10.0,
             approach_radius: 2.0,
+            damping: 1.0e-3,
         }
     }
 }
@@ -156,6 +167,8 @@ pub enum Drive {
     /// The normalised total gradient (the default law, or eq. 15's fallback
     /// when its sum was not a descent direction).
     TotalGradient,
+    /// The damped least-squares step ([`damped`]).
+    Damped,
     /// Nothing to do: the gradient is zero, or every joint that could reduce
     /// `V` sits at a limit.
     Idle,

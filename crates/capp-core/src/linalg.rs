@@ -1,0 +1,118 @@
+//! The one dense solve the planner does: a 6 x 6 symmetric positive definite
+//! system, by Cholesky factorisation in place (`A = L L^T`).
+//!
+//! Task space has six coordinates (end-effector position, length units, and
+//! orientation, radians), so whatever the joint count the damped
+//! least-squares law ([`crate::control::damped`]) solves `6 x 6`: about a
+//! hundred multiply-adds, six square roots, no pivoting. Fixed-size arrays and
+//! constant loop bounds: no allocation, no index that can fail.
+
+// Index loops read as the textbook algorithm; the bounds are constants.
+#![allow(clippy::needless_range_loop)]
+
+/// A symmetric 6 x 6 matrix, rows of `f32`; only the lower triangle
+/// (`a[i][j]`, `j <= i`) is read by [`cholesky`].
+pub type Sym6 = [[f32; 6]; 6];
+
+/// A task-space 6-vector: linear part first (length units), angular part last.
+pub type Vec6 = [f32; 6];
+
+/// Factorises `a` in place into its Cholesky factor `L` (lower triangle; the
+/// strict upper triangle is left as it was). Returns `false`, leaving `a`
+/// partly overwritten, when a pivot is not positive and finite: `a` was not
+/// positive definite (or held NaN).
+pub fn cholesky(a: &mut Sym6) -> bool {
+    for i in 0..6 {
+        for j in 0..=i {
+            let mut s = a[i][j];
+            for k in 0..j {
+                s -= a[i][k] * a[j][k];
+            }
+            if i == j {
+                if !(s > 0.0 && s.is_finite()) {
+                    return false;
+                }
+                a[i][i] = libm::sqrtf(s);
+            } else {
+                a[i][j] = s / a[j][j];
+            }
+        }
+    }
+    true
+}
+
+/// Solves `L L^T x = b` in place (`b` becomes `x`), `l` from [`cholesky`].
+pub fn solve(l: &Sym6, b: &mut Vec6) {
+    for i in 0..6 {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[i][k] * b[k];
+        }
+        b[i] = s / l[i][i];
+    }
+    for i in (0..6).rev() {
+        let mut s = b[i];
+        for k in i + 1..6 {
+            s -= l[k][i] * b[k];
+        }
+        b[i] = s / l[i][i];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fixed SPD matrix: `B B^T + I` for a made-up `B`.
+    fn spd() -> Sym6 {
+        let mut b = [[0.0f32; 6]; 6];
+        for (i, row) in b.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = ((i * 7 + j * 3) % 5) as f32 - 2.0 + 0.1 * i as f32;
+            }
+        }
+        let mut a = [[0.0f32; 6]; 6];
+        for i in 0..6 {
+            for j in 0..6 {
+                a[i][j] = (0..6).map(|k| b[i][k] * b[j][k]).sum::<f32>();
+            }
+            a[i][i] += 1.0;
+        }
+        a
+    }
+
+    #[test]
+    fn solves_a_symmetric_positive_definite_system() {
+        let a = spd();
+        let x_true = [1.0, -2.0, 0.5, 3.0, -1.5, 0.25];
+        let mut b = [0.0f32; 6];
+        for i in 0..6 {
+            b[i] = (0..6).map(|j| a[i][j] * x_true[j]).sum();
+        }
+        let mut l = a;
+        assert!(cholesky(&mut l));
+        // L L^T reproduces A.
+        for i in 0..6 {
+            for j in 0..=i {
+                let llt: f32 = (0..=j).map(|k| l[i][k] * l[j][k]).sum();
+                assert!((llt - a[i][j]).abs() < 1e-3 * a[i][i].abs().max(1.0));
+            }
+        }
+        solve(&l, &mut b);
+        for (x, t) in b.iter().zip(x_true) {
+            assert!((x - t).abs() < 1e-3, "{x} vs {t}");
+        }
+    }
+
+    #[test]
+    fn refuses_what_is_not_positive_definite() {
+        let mut a = spd();
+        a[3][3] = -1.0;
+        assert!(!cholesky(&mut a));
+        let mut a = spd();
+        a[5][2] = f32::NAN;
+        assert!(!cholesky(&mut a));
+        let mut z = [[0.0f32; 6]; 6];
+        assert!(!cholesky(&mut z));
+    }
+}
