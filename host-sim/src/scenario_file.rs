@@ -15,11 +15,13 @@ use std::path::Path;
 
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
-use capp_core::{pips, Joint, JointKind, SetpointFilter, Settings, SuperEllipsoid, Waypoint};
+use capp_core::{
+    pips, Joint, JointKind, Robot, SetpointFilter, Settings, SuperEllipsoid, Waypoint,
+};
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::problem::{LoadError, Problem, SourceKind};
+use crate::problem::{LoadError, Problem, SourceKind, MAX_JOINTS};
 
 /// Length of one inch in metres.
 pub const INCH_M: f64 = 0.0254;
@@ -147,6 +149,7 @@ struct ObstacleSpec {
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct SettingsSpec {
+    characteristic_length: Option<f64>,
     time_step_s: Option<f64>,
     fine_radius: Option<f64>,
     fine_step_fraction: Option<f64>,
@@ -465,11 +468,27 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         obstacle_lines.push(Some(line));
     }
 
-    // Settings: defaults sized in inches, converted to the file's unit.
-    let mut settings = default_settings(per_inch as f32);
+    // Settings: the core's defaults relative to the robot's characteristic
+    // length (its reach, or the one the file states), so they mean the same
+    // in any unit. A robot the core will refuse gets the inch defaults
+    // converted; validation then reports what is wrong with it.
     let settings_line = file.settings.as_ref().map(|s| at(s.span()));
     let s = file.settings.map(|s| s.into_inner()).unwrap_or_default();
     let f = |v: Option<f64>, d: f32| v.map_or(d, |x| x as f32);
+    let mut settings = match (s.characteristic_length, Robot::<MAX_JOINTS>::new(&joints)) {
+        (Some(length), _) if length.is_finite() && length > 0.0 => {
+            Settings::relative_to(length as f32)
+        }
+        (Some(_), _) => {
+            return Err(LoadError::new(
+                path,
+                settings_line,
+                "settings.characteristic_length must be positive and finite",
+            ))
+        }
+        (None, Ok(robot)) => Settings::for_robot(&robot),
+        (None, Err(_)) => default_settings(per_inch as f32),
+    };
     settings.time_step_s = f(s.time_step_s, settings.time_step_s);
     settings.fine_radius = f(s.fine_radius, settings.fine_radius);
     settings.fine_step_fraction = f(s.fine_step_fraction, settings.fine_step_fraction);

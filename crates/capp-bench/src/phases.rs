@@ -20,7 +20,7 @@ use capp_core::control::{
 };
 use capp_core::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use capp_core::math::dot_slice;
-use capp_core::projection::{limit_rates, project, strength};
+use capp_core::projection::{limit_rates, project, retreat, strength};
 use capp_core::step_size::advancement;
 use capp_core::{Planner, Scenario};
 
@@ -116,6 +116,10 @@ impl<const N: usize> PhaseBench<N> {
                 &self.error,
                 &self.mu[..n],
                 engage,
+                retreat(
+                    self.field.clearance.map(|c| c.value),
+                    settings.avoidance.engage_clearance,
+                ),
                 law,
                 settings.time_step_s,
                 &mut self.damped,

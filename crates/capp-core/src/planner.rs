@@ -34,7 +34,7 @@ use crate::control::{
 use crate::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use crate::math::{all_finite, dot_slice};
 use crate::mission::Settings;
-use crate::projection::{limit_rates, project, strength};
+use crate::projection::{limit_rates, project, retreat, strength};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
 use crate::step_size::{self, advancement};
@@ -478,6 +478,10 @@ impl<const N: usize> Planner<N> {
                     &self.now.error,
                     &self.now.mu[..n],
                     engage,
+                    retreat(
+                        self.now.field.clearance.map(|c| c.value),
+                        settings.avoidance.engage_clearance,
+                    ),
                     &settings.law,
                     settings.time_step_s,
                     &mut self.damped,

@@ -46,6 +46,24 @@ pub fn strength(clearance: Option<f32>, engage: f32) -> f32 {
     }
 }
 
+/// Fraction of the potential's excess over its engaged level that the damped
+/// law's projection removes per step (see [`retreat`]).
+pub const RETREAT_GAIN: f32 = 0.2;
+
+/// How far, in potential (eq. 26), the damped law's step must move away from
+/// the obstacles, from the closest pair's clearance `c`: `RETREAT_GAIN (1/c -
+/// 1/engage)` once `c` is below `engage`, 0 above it (and for the paper's
+/// rule, `engage = 0`, which has no band to return to). A step that only
+/// stops approaching (`mu . dq = 0`) still loses clearance along a curved
+/// surface, to second order; this puts it back, geometrically: for one pair
+/// `dP = -dc / c^2`, so `dc = RETREAT_GAIN c (1 - c / engage)` per step.
+pub fn retreat(clearance: Option<f32>, engage: f32) -> f32 {
+    match clearance {
+        Some(c) if engage > 0.0 && c > 0.0 && c < engage => RETREAT_GAIN * (1.0 / c - 1.0 / engage),
+        _ => 0.0,
+    }
+}
+
 /// Removes the fraction `strength` (in `[0, 1]`) of the component of `rate`
 /// (`n` values) that approaches the obstacles; with strength 1, afterwards
 /// `mu . rate <= 0`. `locked` is scratch of `n` flags. Returns whether the

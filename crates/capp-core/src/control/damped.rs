@@ -58,7 +58,10 @@
 //!   not feel: near the target `K` is nearly the projector onto the null
 //!   space of `J`, so a redundant arm bends around an obstacle while its end
 //!   effector keeps converging. Only a step that approaches (`mu_P . dq* > 0`)
-//!   is projected, with the strength of [`crate::projection::strength`].
+//!   is projected, with the strength of [`crate::projection::strength`];
+//!   inside the engaged band the step must also move away by
+//!   [`crate::projection::retreat`] (`mu_P . dq <= -retreat`), so sliding
+//!   along a curved surface does not creep closer step by step.
 //! * **Speed**: `T = max_j |dq_j| / qdot_max_j` is the time the step needs at
 //!   the rate limits. Longer than the time step `h`: the rate is `dq / T`, so
 //!   the most loaded joint runs at its limit along the linearised path.
@@ -166,8 +169,8 @@ pub fn rotation_error<const N: usize>(frames: &Frames<N>, error: &PoseError) -> 
 }
 
 /// The damped least-squares step (module docs) for the arm in `frames` at `q`
-/// with pose `error`, obstacle gradient `mu_p` (eq. 20) and projection
-/// `strength`; writes the joint rate (per second) into `rate` for a step of
+/// with pose `error`, obstacle gradient `mu_p` (eq. 20), projection
+/// `strength` and `retreat` ([`crate::projection::retreat`]); writes the joint rate (per second) into `rate` for a step of
 /// `time_step_s`. All slices hold `robot.len()` values.
 #[allow(clippy::too_many_arguments)]
 pub fn damped_rate<const N: usize>(
@@ -177,6 +180,7 @@ pub fn damped_rate<const N: usize>(
     error: &PoseError,
     mu_p: &[f32],
     strength: f32,
+    retreat: f32,
     law: &LawSettings,
     time_step_s: f32,
     ws: &mut DampedWorkspace<N>,
@@ -282,10 +286,12 @@ pub fn damped_rate<const N: usize>(
         }
     }
 
-    // One-sided projection in the metric of the damped problem.
+    // One-sided projection in the metric of the damped problem: at most
+    // (1 - strength) of the approach is left, and `retreat` is taken away.
     let mut constrained = false;
     let approach: f32 = mu_p.iter().zip(rate.iter()).map(|(m, r)| m * r).sum();
-    if strength > 0.0 && approach > 0.0 && approach.is_finite() {
+    let allowed = (1.0 - strength.min(1.0)) * approach.max(0.0) - retreat.max(0.0);
+    if strength > 0.0 && approach > allowed && approach.is_finite() && allowed.is_finite() {
         // t = J M mu_P, solved in place; then K mu_P = M mu_P - M J^T t.
         let mut t = [0.0f32; 6];
         for ((column, &m), &g) in ws.columns.iter().zip(&ws.metric).zip(mu_p) {
@@ -300,7 +306,7 @@ pub fn damped_rate<const N: usize>(
             along += g * (m * g - m * dot6(column, &t));
         }
         if along > 0.0 && along.is_finite() {
-            let k = strength.min(1.0) * approach / along;
+            let k = (approach - allowed) / along;
             for ((r, column), (&m, &g)) in rate
                 .iter_mut()
                 .zip(&ws.columns)
