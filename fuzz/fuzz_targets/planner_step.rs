@@ -85,7 +85,7 @@ struct FuzzSettings {
     fine_step_fraction: Num,
     position_tolerance: Num,
     orientation_tolerance: Num,
-    paper: bool,
+    law: u8,
     orientation_scale: Num,
     approach_radius: Num,
     joint_margin: Num,
@@ -93,6 +93,8 @@ struct FuzzSettings {
     points_per_link: u8,
     influence_distance: Num,
     engage_clearance: Num,
+    advance_fraction: Num,
+    damping: Num,
     max_steps: u16,
     stall_window: u16,
     stall_progress: Num,
@@ -130,11 +132,13 @@ fn settings(f: &FuzzSettings) -> Settings {
     s.fine_step_fraction = f.fine_step_fraction.positive(1.0);
     s.position_tolerance = f.position_tolerance.positive(1.0);
     s.orientation_tolerance = f.orientation_tolerance.positive(1.0);
-    s.law.kind = if f.paper {
-        LawKind::Paper
-    } else {
-        LawKind::Gradient
+    s.law.kind = match f.law % 3 {
+        0 => LawKind::Paper,
+        1 => LawKind::Gradient,
+        _ => LawKind::DampedLeastSquares,
     };
+    s.law.damping = f.damping.positive(1.5);
+    s.avoidance.advance_fraction = f.advance_fraction.positive(1.5);
     s.law.orientation_scale = f.orientation_scale.positive(20.0);
     s.law.approach_radius = f.approach_radius.positive(5.0);
     s.avoidance.joint_margin = f.joint_margin.positive(5.0);

@@ -493,6 +493,21 @@ impl<const N: usize> Planner<N> {
         if !all_finite(&self.rate[..n]) {
             self.rate[..n].fill(0.0);
         }
+        // A joint that would pass a limit within h stops at it: the step is
+        // the straight segment to the clamped point, so every shorter step is
+        // a part of it and stays within the limits.
+        if h > 0.0 {
+            for ((r, &qj), joint) in self.rate[..n]
+                .iter_mut()
+                .zip(&self.q[..n])
+                .zip(robot.joints())
+            {
+                let end = joint.clamp(qj + h * *r);
+                if end != qj + h * *r {
+                    *r = (end - qj) / h;
+                }
+            }
+        }
         let err = self.now.error.position;
         // No point may travel farther than a fraction of its clearance.
         h = advancement(
