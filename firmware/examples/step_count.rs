@@ -352,7 +352,13 @@ fn main() -> ! {
         core::mem::size_of::<Planner<18>>() as u64 * 10,
     );
 
-    for k in PIPS_OBSTACLES.into_iter().chain([64]) {
+    let all = [PIPS_OBSTACLES[0], PIPS_OBSTACLES[1], PIPS_OBSTACLES[2], 64];
+    let pips_counts: &[usize] = if cfg!(feature = "step-count-quick") {
+        &all[..2]
+    } else {
+        &all
+    };
+    for &k in pips_counts {
         match scenes::pips(k) {
             Ok(scene) => {
                 let listing_reps = if k <= 32 { 2 } else { 0 };
@@ -393,6 +399,18 @@ fn main() -> ! {
             line(law, 18, 8, "step", step);
         }
     }
+    if !cfg!(feature = "step-count-quick") {
+        sweeps(overhead);
+    }
+    hprintln!("capp step_count: done");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// The influence-distance sweep and the chain scaling table.
+fn sweeps(overhead: u64) {
     // What the influence distance costs: PIPS with 8 obstacles, one line per
     // distance, `joints` = the distance in inches.
     for influence in INFLUENCE_SWEEP_IN {
@@ -428,10 +446,5 @@ fn main() -> ! {
                 Err(e) => hprintln!("M4F chain {} {} error {:?}", n, m, e),
             }
         }
-    }
-    hprintln!("capp step_count: done");
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {
-        cortex_m::asm::wfi();
     }
 }

@@ -42,7 +42,7 @@ pub struct PhaseBench<const N: usize> {
     columns: [f32; N],
     locked: [bool; N],
     mu: [f32; N],
-    distance: [f32; N],
+    distance_sq: [f32; N],
     damped: DampedWorkspace<N>,
     field: ObstacleField,
 }
@@ -71,7 +71,7 @@ impl<const N: usize> PhaseBench<N> {
             columns: [0.0; N],
             locked: [false; N],
             mu: [0.0; N],
-            distance: [0.0; N],
+            distance_sq: [0.0; N],
             damped: DampedWorkspace::default(),
             field: ObstacleField::default(),
         };
@@ -152,7 +152,7 @@ impl<const N: usize> PhaseBench<N> {
             scenario.obstacles(),
             &scenario.settings().avoidance,
             &mut self.mu,
-            &mut self.distance,
+            &mut self.distance_sq,
         );
         self.field.potential
     }
@@ -176,7 +176,7 @@ impl<const N: usize> PhaseBench<N> {
         let h = advancement(
             robot,
             &self.frames,
-            &self.distance[..n],
+            &self.distance_sq[..n],
             &self.rate[..n],
             h,
             settings.avoidance.advance_fraction,

@@ -22,7 +22,7 @@
 //! at fraction `t` of the sliding link moves `t` as far as its end).
 
 use crate::kinematics::Frames;
-use crate::math::Vec3;
+use crate::math::{min, Vec3};
 use crate::obstacle::{Obstacle, PointKind};
 use crate::robot::{JointKind, Robot};
 
@@ -158,9 +158,10 @@ pub struct ObstacleField {
 }
 
 /// Evaluates the potential and writes `mu = dP/dq` into `mu` (`frames.len()`
-/// values) and, per link, a lower bound on the distance from any of its
-/// avoidance points to any inflated obstacle into `distance` (length units;
-/// the influence distance when no obstacle is within it; see
+/// values) and, per link, the square of a lower bound on the distance from
+/// any of its avoidance points to any inflated obstacle into `distance_sq`
+/// (length units squared; the influence distance's square when no obstacle
+/// is within it, infinity when there are none; see
 /// [`crate::obstacle::Contact::distance_sq`]).
 pub fn potential_gradient<const N: usize>(
     robot: &Robot<N>,
@@ -168,7 +169,7 @@ pub fn potential_gradient<const N: usize>(
     obstacles: &[Obstacle],
     settings: &AvoidanceSettings,
     mu: &mut [f32],
-    distance: &mut [f32],
+    distance_sq: &mut [f32],
 ) -> ObstacleField {
     let mut field = ObstacleField {
         clear: true,
@@ -176,7 +177,7 @@ pub fn potential_gradient<const N: usize>(
     };
     let mut force = Vec3::zeros();
     let mut moment = Vec3::zeros();
-    let n = frames.len().min(mu.len()).min(distance.len());
+    let n = frames.len().min(mu.len()).min(distance_sq.len());
     // Nothing to hit: no bound. Otherwise a link no obstacle is near is at
     // least the influence distance from all of them.
     let influence_sq = if obstacles.is_empty() {
@@ -196,7 +197,7 @@ pub fn potential_gradient<const N: usize>(
                 let Some(contact) = obstacle.contact(&point.position, point.kind) else {
                     continue;
                 };
-                link_distance_sq = link_distance_sq.min(contact.distance_sq);
+                link_distance_sq = min(link_distance_sq, contact.distance_sq);
                 if contact.clearance == f32::INFINITY {
                     // Beyond the potential's cut-off: only the distance counts.
                     continue;
@@ -221,7 +222,7 @@ pub fn potential_gradient<const N: usize>(
             moment += (point.position - pivot).cross(&f);
             sliding_force += f * point.t;
         }
-        distance[j] = libm::sqrtf(link_distance_sq);
+        distance_sq[j] = link_distance_sq;
         let z = frames.axis(j);
         // `get`, not `[j]`: no panic path (the frames are the robot's, so it is always `Some`).
         mu[j] = match robot.joints().get(j).map(|joint| joint.kind) {

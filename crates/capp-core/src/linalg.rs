@@ -1,5 +1,5 @@
 //! The one dense solve the planner does: a 6 x 6 symmetric positive definite
-//! system, by Cholesky factorisation in place (`A = L L^T`).
+//! system, by `L D L^T` factorisation in place (Cholesky without square roots).
 //!
 //! Task space has six coordinates (end-effector position, length units, and
 //! orientation, radians), so whatever the joint count the damped
@@ -11,51 +11,57 @@
 #![allow(clippy::needless_range_loop)]
 
 /// A symmetric 6 x 6 matrix, rows of `f32`; only the lower triangle
-/// (`a[i][j]`, `j <= i`) is read by [`cholesky`].
+/// (`a[i][j]`, `j <= i`) is read by [`factor`].
 pub type Sym6 = [[f32; 6]; 6];
 
 /// A task-space 6-vector: linear part first (length units), angular part last.
 pub type Vec6 = [f32; 6];
 
-/// Factorises `a` in place into its Cholesky factor `L` (lower triangle; the
-/// strict upper triangle is left as it was). Returns `false`, leaving `a`
-/// partly overwritten, when a pivot is not positive and finite: `a` was not
-/// positive definite (or held NaN).
-pub fn cholesky(a: &mut Sym6) -> bool {
-    for i in 0..6 {
-        for j in 0..=i {
+/// Factorises `a` in place as `L D L^T` (Cholesky without square roots: a
+/// software square root is some forty instructions on a Cortex-M4F): the
+/// strict lower triangle becomes the unit lower-triangular `L`, the diagonal
+/// becomes `D`; the strict upper triangle is left as it was. Returns `false`,
+/// leaving `a` partly overwritten, when a pivot of `D` is not positive and
+/// finite: `a` was not positive definite (or held NaN).
+pub fn factor(a: &mut Sym6) -> bool {
+    for j in 0..6 {
+        let mut d = a[j][j];
+        for k in 0..j {
+            d -= a[j][k] * a[j][k] * a[k][k];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+        a[j][j] = d;
+        for i in j + 1..6 {
             let mut s = a[i][j];
             for k in 0..j {
-                s -= a[i][k] * a[j][k];
+                s -= a[i][k] * a[j][k] * a[k][k];
             }
-            if i == j {
-                if !(s > 0.0 && s.is_finite()) {
-                    return false;
-                }
-                a[i][i] = libm::sqrtf(s);
-            } else {
-                a[i][j] = s / a[j][j];
-            }
+            a[i][j] = s / d;
         }
     }
     true
 }
 
-/// Solves `L L^T x = b` in place (`b` becomes `x`), `l` from [`cholesky`].
-pub fn solve(l: &Sym6, b: &mut Vec6) {
+/// Solves `L D L^T x = b` in place (`b` becomes `x`), the factor from [`factor`].
+pub fn solve(f: &Sym6, b: &mut Vec6) {
     for i in 0..6 {
         let mut s = b[i];
         for k in 0..i {
-            s -= l[i][k] * b[k];
+            s -= f[i][k] * b[k];
         }
-        b[i] = s / l[i][i];
+        b[i] = s;
+    }
+    for i in 0..6 {
+        b[i] /= f[i][i];
     }
     for i in (0..6).rev() {
         let mut s = b[i];
         for k in i + 1..6 {
-            s -= l[k][i] * b[k];
+            s -= f[k][i] * b[k];
         }
-        b[i] = s / l[i][i];
+        b[i] = s;
     }
 }
 
@@ -90,12 +96,13 @@ mod tests {
             b[i] = (0..6).map(|j| a[i][j] * x_true[j]).sum();
         }
         let mut l = a;
-        assert!(cholesky(&mut l));
-        // L L^T reproduces A.
+        assert!(factor(&mut l));
+        // L D L^T reproduces A.
         for i in 0..6 {
             for j in 0..=i {
-                let llt: f32 = (0..=j).map(|k| l[i][k] * l[j][k]).sum();
-                assert!((llt - a[i][j]).abs() < 1e-3 * a[i][i].abs().max(1.0));
+                let unit = |r: usize, c: usize| if r == c { 1.0 } else { l[r][c] };
+                let ldlt: f32 = (0..=j).map(|k| unit(i, k) * l[k][k] * unit(j, k)).sum();
+                assert!((ldlt - a[i][j]).abs() < 1e-3 * a[i][i].abs().max(1.0));
             }
         }
         solve(&l, &mut b);
@@ -108,11 +115,11 @@ mod tests {
     fn refuses_what_is_not_positive_definite() {
         let mut a = spd();
         a[3][3] = -1.0;
-        assert!(!cholesky(&mut a));
+        assert!(!factor(&mut a));
         let mut a = spd();
         a[5][2] = f32::NAN;
-        assert!(!cholesky(&mut a));
+        assert!(!factor(&mut a));
         let mut z = [[0.0f32; 6]; 6];
-        assert!(!cholesky(&mut z));
+        assert!(!factor(&mut z));
     }
 }

@@ -106,6 +106,30 @@ pub fn is_rotation(r: &Mat3, tolerance: f32) -> bool {
     off && (r.determinant() - 1.0).abs() <= tolerance
 }
 
+/// The larger of `a` and `b` by one comparison (`a` when they are unordered).
+///
+/// `f32::max` and `f32::min` are calls to `fmaxf` / `fminf` on the
+/// Cortex-M4F (its FPU has no `VMAXNM`): a dozen instructions each for NaN
+/// rules the per-step code does not rely on. These are a compare and a select.
+#[inline(always)]
+pub fn max(a: f32, b: f32) -> f32 {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+/// The smaller of `a` and `b` by one comparison (`a` when they are unordered).
+#[inline(always)]
+pub fn min(a: f32, b: f32) -> f32 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
 /// Whether every entry is finite.
 #[inline]
 pub fn all_finite(v: &[f32]) -> bool {

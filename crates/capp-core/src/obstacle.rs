@@ -24,7 +24,7 @@
 //! `C` is never NaN: terms are non-negative and an overflowing one is `inf`, and
 //! any `C` above [`C_CUTOFF`] is treated as "out of influence".
 
-use crate::math::{rotation_123, vec3, Mat3, Vec3};
+use crate::math::{max, rotation_123, vec3, Mat3, Vec3};
 
 /// Largest `C` that still counts as "within influence"; the potential `1/(C-1)`
 /// there is below `1e-6` and its gradient negligible.
@@ -393,7 +393,7 @@ impl Obstacle {
                 0.0
             };
             local_gradient[axis] = slope * inv[axis] * sign;
-            let outside = (x[axis].abs() - axes[axis]).max(0.0);
+            let outside = max(x[axis].abs() - axes[axis], 0.0);
             box_sq += outside * outside;
         }
         if c > C_CUTOFF || c.is_nan() {
@@ -422,7 +422,7 @@ impl Obstacle {
             distance_sq: if clearance <= 0.0 {
                 0.0
             } else {
-                convex_sq.max(box_sq)
+                max(convex_sq, box_sq)
             },
         })
     }

@@ -32,7 +32,7 @@ use crate::control::{
     descent_rate, lyapunov_terms, pose_error, weighted_rate, Drive, LawKind, PoseError, Target,
 };
 use crate::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
-use crate::math::{all_finite, dot_slice};
+use crate::math::{all_finite, dot_slice, min};
 use crate::mission::Settings;
 use crate::projection::{limit_rates, project, retreat, strength};
 use crate::robot::Robot;
@@ -158,8 +158,9 @@ struct Evaluation<const N: usize> {
     frames: Frames<N>,
     error: PoseError,
     mu: [f32; N],
-    /// Per link, a lower bound on its points' distance to any inflated obstacle.
-    distance: [f32; N],
+    /// Per link, the square of a lower bound on its points' distance to any
+    /// inflated obstacle.
+    distance_sq: [f32; N],
     field: ObstacleField,
 }
 
@@ -169,7 +170,7 @@ impl<const N: usize> Evaluation<N> {
             frames: Frames::default(),
             error: PoseError::default(),
             mu: [0.0; N],
-            distance: [0.0; N],
+            distance_sq: [0.0; N],
             field: ObstacleField::default(),
         }
     }
@@ -193,7 +194,7 @@ impl<const N: usize> Evaluation<N> {
             scenario.obstacles(),
             &scenario.settings().avoidance,
             &mut self.mu,
-            &mut self.distance,
+            &mut self.distance_sq,
         );
     }
 }
@@ -416,11 +417,10 @@ impl<const N: usize> Planner<N> {
         let descent = descent_rate(&self.terms, &settings.law, &self.rate[..n]);
         if descent > 0.0 {
             let twist = end_twist(robot, &self.now.frames, &self.rate[..n]);
-            h = h.min(step_size::descent_bound(
-                descent,
-                twist,
-                settings.law.orientation_scale,
-            ));
+            h = min(
+                h,
+                step_size::descent_bound(descent, twist, settings.law.orientation_scale),
+            );
         }
         column_sizes(
             robot,
@@ -429,7 +429,7 @@ impl<const N: usize> Planner<N> {
             &mut self.columns[..n],
         );
         let stiffness = dot_slice(&self.gain[..n], &self.columns[..n]);
-        h = h.min(step_size::stiffness_bound(stiffness));
+        h = min(h, step_size::stiffness_bound(stiffness));
         (drive, constrained, h)
     }
 
@@ -513,7 +513,7 @@ impl<const N: usize> Planner<N> {
         h = advancement(
             robot,
             &self.now.frames,
-            &self.now.distance[..n],
+            &self.now.distance_sq[..n],
             &self.rate[..n],
             h,
             settings.avoidance.advance_fraction,

@@ -27,6 +27,7 @@
 //! Obstacles beyond the influence distance contribute nothing to `mu` (see
 //! [`crate::avoidance`]), so they do not constrain the arm at all.
 
+use crate::math::{max, min};
 use crate::robot::Robot;
 
 /// Whether joint `j` at `q` would be pushed past a limit by `rate`.
@@ -41,7 +42,7 @@ fn blocked(min: f32, max: f32, q: f32, rate: f32) -> bool {
 pub fn strength(clearance: Option<f32>, engage: f32) -> f32 {
     match clearance {
         None => 0.0,
-        Some(c) if engage > 0.0 => ((2.0 * engage - c) / engage).clamp(0.0, 1.0),
+        Some(c) if engage > 0.0 => min(max((2.0 * engage - c) / engage, 0.0), 1.0),
         Some(_) => 1.0,
     }
 }
@@ -109,7 +110,7 @@ pub fn project<const N: usize>(
         if !(approach > 0.0 && size_sq > 0.0 && approach.is_finite() && size_sq.is_finite()) {
             return pass > 0;
         }
-        let k = strength.min(1.0) * approach / size_sq;
+        let k = min(strength, 1.0) * approach / size_sq;
         let mut newly_locked = false;
         for (((joint, &qj), (&r, &m)), l) in joints
             .iter()
@@ -143,7 +144,7 @@ pub fn limit_rates<const N: usize>(robot: &Robot<N>, rate: &mut [f32]) -> f32 {
         .iter()
         .zip(rate.iter())
         .map(|(joint, r)| r.abs() / joint.max_rate)
-        .fold(0.0f32, f32::max);
+        .fold(0.0f32, max);
     if worst > 1.0 {
         let k = 1.0 / worst;
         rate.iter_mut().for_each(|r| *r *= k);

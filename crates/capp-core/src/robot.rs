@@ -98,7 +98,7 @@ impl Joint {
     /// `q` clamped into `[min, max]`.
     #[inline]
     pub fn clamp(&self, q: f32) -> f32 {
-        q.max(self.min).min(self.max)
+        crate::math::min(crate::math::max(q, self.min), self.max)
     }
 }
 

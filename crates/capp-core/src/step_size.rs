@@ -31,12 +31,12 @@
 //! and a prismatic one, and 0 for two prismatic ones. `J_p h qdot` is linear in
 //! `p` along a link (`v(x) = w x x + b`), so a link's worst point is one of its
 //! ends. Each link's distance is the lower bound of
-//! [`crate::obstacle::Contact::distance_sq`] (exact for convex `C`), or the
-//! influence distance for a link no obstacle is near.
+//! [`crate::obstacle::Contact::distance_sq`] (it holds for every convex `C`),
+//! or the influence distance for a link no obstacle is near.
 
 use crate::control::PoseError;
 use crate::kinematics::Frames;
-use crate::math::{norm, Vec3};
+use crate::math::{max, min, Vec3};
 use crate::mission::Settings;
 use crate::robot::{JointKind, Robot};
 
@@ -92,12 +92,16 @@ pub fn stiffness_bound(stiffness: f32) -> f32 {
 
 /// Conservative advancement (module docs): the largest `h' <= h` for which no
 /// avoidance point of any link travels more than `fraction` of that link's
-/// obstacle `distance` (length units, one per link) when the joints move by
-/// `h' rate`. `rate` and `distance` hold one value per joint.
+/// obstacle distance (`distance_sq`, its square, one per link) when the
+/// joints move by `h' rate`. `rate` and `distance_sq` hold one value per joint.
+///
+/// Square roots only where a link might be bound: `(a + b)^2 <= 2 (a^2 + b^2)`
+/// settles most links in squares (a software square root is some forty
+/// instructions on a Cortex-M4F).
 pub fn advancement<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
-    distance: &[f32],
+    distance_sq: &[f32],
     rate: &[f32],
     h: f32,
     fraction: f32,
@@ -106,13 +110,14 @@ pub fn advancement<const N: usize>(
     let mut w = Vec3::zeros();
     let mut b = Vec3::zeros();
     let (mut phi_r, mut phi_p) = (0.0f32, 0.0f32);
-    let mut start_speed = 0.0f32;
+    let mut start_speed_sq = 0.0f32;
     let mut scale = 1.0f32;
-    for (j, ((joint, link), (&r, &d))) in robot
+    let fraction_sq = fraction * fraction;
+    for (j, ((joint, link), (&r, &d_sq))) in robot
         .joints()
         .iter()
         .zip(robot.links())
-        .zip(rate.iter().zip(distance))
+        .zip(rate.iter().zip(distance_sq))
         .enumerate()
     {
         let step = r * h;
@@ -128,18 +133,25 @@ pub fn advancement<const N: usize>(
                 phi_p += step.abs();
             }
         }
-        let end_speed = norm(&(w.cross(&frames.origin(j)) + b));
-        let travel = start_speed.max(end_speed) + link.chain * phi_r * phi_r + phi_r * phi_p;
+        let v = w.cross(&frames.origin(j)) + b;
+        let end_speed_sq = v.dot(&v);
+        let first_sq = max(start_speed_sq, end_speed_sq);
+        let second = link.chain * phi_r * phi_r + phi_r * phi_p;
+        start_speed_sq = end_speed_sq;
+        let allowed_sq = fraction_sq * d_sq;
+        if 2.0 * (first_sq + second * second) <= allowed_sq {
+            continue;
+        }
         // travel(s h) <= s travel(h) for s <= 1: first-order terms scale with
         // s, second-order ones with s^2.
-        let allowed = fraction * d;
+        let travel = libm::sqrtf(first_sq) + second;
+        let allowed = libm::sqrtf(allowed_sq);
         if travel > allowed {
-            scale = scale.min(allowed / travel);
+            scale = min(scale, allowed / travel);
         }
-        start_speed = end_speed;
     }
     if scale.is_finite() {
-        h * scale.max(0.0)
+        h * max(scale, 0.0)
     } else {
         0.0
     }

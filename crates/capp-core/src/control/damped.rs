@@ -73,8 +73,8 @@
 
 use crate::control::{joint_weight, Drive, LawSettings, PoseError};
 use crate::kinematics::Frames;
-use crate::linalg::{cholesky, solve, Sym6, Vec6};
-use crate::math::{norm, Vec3};
+use crate::linalg::{factor, solve, Sym6, Vec6};
+use crate::math::{max, min, norm, Vec3};
 use crate::robot::{JointKind, Robot};
 
 /// Buffers of the damped least-squares law, sized once for `N` joints.
@@ -86,7 +86,7 @@ pub struct DampedWorkspace<const N: usize> {
     metric: [f32; N],
     /// `G = -dV/dq` (eq. 13).
     gradient: [f32; N],
-    /// Cholesky factor of `J M J^T + mu Lambda^-1`.
+    /// `L D L^T` factor of `J M J^T + mu Lambda^-1`.
     factor: Sym6,
 }
 
@@ -258,7 +258,7 @@ pub fn damped_rate<const N: usize>(
     for (r, row) in a.iter_mut().enumerate() {
         row[r] += if r < 3 || w_o == 0.0 { mu } else { mu / w_o };
     }
-    if !cholesky(&mut a) {
+    if !factor(&mut a) {
         return idle(rate);
     }
     ws.factor = a;
@@ -290,7 +290,7 @@ pub fn damped_rate<const N: usize>(
     // (1 - strength) of the approach is left, and `retreat` is taken away.
     let mut constrained = false;
     let approach: f32 = mu_p.iter().zip(rate.iter()).map(|(m, r)| m * r).sum();
-    let allowed = (1.0 - strength.min(1.0)) * approach.max(0.0) - retreat.max(0.0);
+    let allowed = (1.0 - min(strength, 1.0)) * max(approach, 0.0) - max(retreat, 0.0);
     if strength > 0.0 && approach > allowed && approach.is_finite() && allowed.is_finite() {
         // t = J M mu_P, solved in place; then K mu_P = M mu_P - M J^T t.
         let mut t = [0.0f32; 6];
@@ -324,11 +324,11 @@ pub fn damped_rate<const N: usize>(
         .iter()
         .zip(rate.iter())
         .map(|(joint, r)| r.abs() / joint.max_rate)
-        .fold(0.0f32, f32::max);
+        .fold(0.0f32, max);
     if !(time_at_limits > 0.0 && time_at_limits.is_finite()) {
         return idle(rate);
     }
-    let k = 1.0 / time_at_limits.max(time_step_s);
+    let k = 1.0 / max(time_at_limits, time_step_s);
     rate.iter_mut().for_each(|r| *r *= k);
     DampedStep {
         drive: Drive::Damped,

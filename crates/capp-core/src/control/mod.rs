@@ -39,7 +39,7 @@
 pub mod damped;
 
 use crate::kinematics::{end_direction_error, end_point_force, Frames};
-use crate::math::{dot_slice, norm_slice, Mat3, Vec3};
+use crate::math::{dot_slice, max, min, norm_slice, Mat3, Vec3};
 use crate::robot::{Joint, Robot};
 
 /// Where the end effector should go: a position and, optionally, an orientation.
@@ -248,7 +248,7 @@ pub fn weighted_rate<const N: usize>(
         .iter()
         .zip(rate.iter())
         .map(|(joint, r)| r.abs() / joint.max_rate)
-        .fold(0.0f32, f32::max);
+        .fold(0.0f32, max);
     let k = smooth(libm::sqrtf(2.0 * error.v), settings.approach_radius) / worst;
     if !(k.is_finite()) {
         rate.fill(0.0);
@@ -279,7 +279,7 @@ pub fn descent_rate<const N: usize>(
 #[inline]
 fn smooth(error: f32, radius: f32) -> f32 {
     if radius > 0.0 {
-        (error / radius).min(1.0)
+        min(error / radius, 1.0)
     } else {
         1.0
     }
@@ -297,7 +297,7 @@ pub fn joint_weight(joint: &Joint, q: f32, drive: f32) -> f32 {
     } else {
         0.0
     };
-    (k * (1.0 - eta * joint.range_fraction(q))).max(0.0)
+    max(k * (1.0 - eta * joint.range_fraction(q)), 0.0)
 }
 
 /// Eq. 18 applied: `rate_i = m_ii drive_i`.
