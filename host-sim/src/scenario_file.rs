@@ -159,6 +159,7 @@ struct SettingsSpec {
     link_margin: Option<f64>,
     points_per_link: Option<u8>,
     influence_distance: Option<f64>,
+    engage_clearance: Option<f64>,
     max_steps: Option<u32>,
     stall_window: Option<u32>,
     stall_progress: Option<f64>,
@@ -482,6 +483,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     settings.avoidance.link_margin = f(s.link_margin, settings.avoidance.link_margin);
     settings.avoidance.influence_distance =
         f(s.influence_distance, settings.avoidance.influence_distance);
+    settings.avoidance.engage_clearance =
+        f(s.engage_clearance, settings.avoidance.engage_clearance);
     if let Some(v) = s.points_per_link {
         settings.avoidance.points_per_link = v;
     }
