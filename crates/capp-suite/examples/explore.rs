@@ -20,7 +20,19 @@ fn main() {
         for c in &cases {
             std::fs::write(format!("/tmp/cases/{}.toml", c.name), &c.text).unwrap();
             let t = Instant::now();
-            let r = runner::run_case(c, &variants(), 1, Some(Budget::default()));
+            let r = runner::run_case(
+                c,
+                &variants(),
+                1,
+                Some(Budget {
+                    iterations: std::env::var("ITER")
+                        .ok()
+                        .and_then(|s| s.parse().ok())
+                        .unwrap_or(3000),
+                    nodes: 200_000,
+                    shortcuts: 200,
+                }),
+            );
             let o = r.oracle.as_ref().unwrap();
             let runs: Vec<String> = r
                 .runs

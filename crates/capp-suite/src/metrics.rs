@@ -22,6 +22,20 @@ use capp_sim::Problem;
 /// configurations, in the dense re-check between rows and in the oracle.
 pub const DENSE_STEP: f64 = 0.01;
 
+/// `C - 1` above `-ROUNDING` (and at most 0) is a *contact*: the point is on
+/// the inflated surface within what `f32` arithmetic can decide. The planner
+/// accepts a point when its `f32` evaluation says `C - 1 > 0`; the exact value
+/// can then be a few 1e-6 below 0 (the README's "limits found on the way").
+/// Below `-ROUNDING` (1e-4, ten times the worst rounding of the families'
+/// scales) it is a *collision*: no rounding explains it.
+pub const ROUNDING: f64 = 1.0e-4;
+
+/// How the checker classes one configuration's closest pair.
+fn class(value: f64) -> (bool, bool) {
+    let collision = value.is_nan() || value <= -ROUNDING;
+    (collision, !collision && value <= 0.0)
+}
+
 /// One planner run, measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunMetrics {
@@ -46,10 +60,13 @@ pub struct RunMetrics {
     /// Smallest `C - 1` over rows and the dense points between them.
     pub closest: Option<f64>,
     /// Checked configurations (rows and between rows) with an avoidance point
-    /// inside an inflated obstacle (`C - 1 <= 0` or NaN).
+    /// inside an inflated obstacle beyond rounding (`C - 1 <= -ROUNDING`, or NaN).
     pub collisions: usize,
     /// Of those, how many were between rows.
     pub collisions_between: usize,
+    /// Checked configurations touching an inflated surface within rounding
+    /// (`-ROUNDING < C - 1 <= 0`; `capp check`'s exact test counts these too).
+    pub contacts: usize,
     /// Rows with a NaN or infinite value.
     pub not_finite: usize,
     /// Joint-limit violations.
@@ -65,7 +82,8 @@ pub struct RunMetrics {
 }
 
 impl RunMetrics {
-    /// Violations of every kind that must never happen.
+    /// Violations of every kind that must never happen (contacts within
+    /// rounding are not among them; see [`ROUNDING`]).
     pub fn violations(&self) -> usize {
         self.collisions + self.not_finite + self.joint_limit + self.rate_limit + self.other
     }
@@ -118,36 +136,37 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
     let trajectory = Trajectory::from_rows(&result.rows);
     let report = check::check(problem, &trajectory);
     let count = |kind| report.violations.iter().filter(|v| v.kind == kind).count();
-    // The checker reports every point / obstacle pair; count configurations.
-    let mut steps_in_collision: Vec<u64> = report
-        .violations
-        .iter()
-        .filter(|v| v.kind == ViolationKind::Collision)
-        .map(|v| v.step)
-        .collect();
-    steps_in_collision.dedup();
-    let collision_rows = steps_in_collision.len();
     let geometry = Geometry::new(problem);
     let rates = rates(problem);
     let rows: Vec<Vec<f64>> = trajectory.rows.iter().map(|r| r.q.clone()).collect();
 
-    let mut closest = report.min_clearance.map(|c| c.0);
-    let mut collisions_between = 0;
+    // The checker reports every point / obstacle pair of a row in collision;
+    // here each configuration is classed once by its closest pair.
+    let mut closest: Option<f64> = None;
+    let (mut collision_rows, mut collisions_between, mut contacts) = (0, 0, 0);
+    let mut visit = |q: &[f64], at_row: bool| {
+        if let Some(c) = geometry.clearance(q) {
+            let (collision, contact) = class(c.value);
+            collision_rows += (collision && at_row) as usize;
+            collisions_between += (collision && !at_row) as usize;
+            contacts += contact as usize;
+            if closest.is_none_or(|m| c.value < m) {
+                closest = Some(c.value);
+            }
+        }
+    };
     let mut dense_checks = 0;
     let mut same_path_time = 0.0;
+    if let Some(first) = rows.first() {
+        visit(first, true);
+    }
     for pair in rows.windows(2) {
         same_path_time += rate_time(&rates, &pair[0], &pair[1]);
         dense_checks += between(&pair[0], &pair[1], |q| {
-            if let Some(c) = geometry.clearance(q) {
-                if c.value.is_nan() || c.value <= 0.0 {
-                    collisions_between += 1;
-                }
-                if closest.is_none_or(|m| c.value < m) {
-                    closest = Some(c.value);
-                }
-            }
+            visit(q, false);
             true
         });
+        visit(&pair[1], true);
     }
     let motion_time = trajectory.rows.iter().map(|r| r.h).sum();
     let straight_time = match (rows.first(), rows.last()) {
@@ -185,6 +204,7 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         closest,
         collisions: collision_rows + collisions_between,
         collisions_between,
+        contacts,
         not_finite: count(ViolationKind::NotFinite),
         joint_limit: count(ViolationKind::JointLimit),
         rate_limit: count(ViolationKind::RateLimit),

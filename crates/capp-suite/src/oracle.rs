@@ -43,8 +43,8 @@ pub struct Budget {
 impl Default for Budget {
     fn default() -> Self {
         Budget {
-            iterations: 3000,
-            nodes: 20_000,
+            iterations: 10_000,
+            nodes: 40_000,
             shortcuts: 200,
         }
     }

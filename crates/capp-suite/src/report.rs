@@ -69,7 +69,7 @@ pub fn grouped(x: f64) -> String {
     let digits = v.unsigned_abs().to_string();
     let mut out = String::new();
     for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i) % 3 == 0 {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
             out.push(' ');
         }
         out.push(c);
@@ -146,6 +146,7 @@ impl<'a> Tally<'a> {
         let reached = self.count(Outcome::Reached);
         let reached_certified = self.reached().filter(|(c, _)| certified(c)).count();
         let collisions: usize = self.runs.iter().map(|(_, m)| m.collisions).sum();
+        let contacts: usize = self.runs.iter().map(|(_, m)| m.contacts).sum();
         let broken: usize = self
             .runs
             .iter()
@@ -168,7 +169,7 @@ impl<'a> Tally<'a> {
             errors = format!(" ({} refused)", self.errors);
         }
         format!(
-            "| {lead} | {}{errors} | {} | {} | {} | {} | {} | {}{} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
+            "| {lead} | {}{errors} | {} | {} | {} | {} | {} | {}{} | {} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
             self.cases,
             self.certified,
             reached,
@@ -177,6 +178,7 @@ impl<'a> Tally<'a> {
             pct(reached_certified, self.certified),
             collisions,
             if broken > 0 { format!(" (+{broken} limit/NaN)") } else { String::new() },
+            contacts,
             opt_int(median(&steps)),
             opt_int(percentile(&steps, 0.9)),
             opt_int(steps.iter().copied().reduce(f64::max)),
@@ -191,8 +193,8 @@ impl<'a> Tally<'a> {
     }
 }
 
-const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
-const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | contacts within rounding | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
+const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 fn ratio(a: f64, b: f64) -> Option<f64> {
     (b > 0.0 && a.is_finite()).then(|| a / b)
@@ -391,15 +393,16 @@ pub fn markdown(
     for r in results {
         for v in &r.runs {
             if let Ok(m) = &v.metrics {
-                if m.violations() > 0 {
+                if m.violations() > 0 || m.contacts > 0 {
                     unsafe_runs.push(format!(
-                        "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                        "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                         r.case.name,
                         v.variant.name,
                         capp_sim::output::outcome_name(m.outcome),
                         m.collisions - m.collisions_between,
                         m.collisions_between,
-                        opt(m.closest, 4),
+                        m.contacts,
+                        m.closest.map_or("-".into(), |c| format!("{c:.2e}")),
                         m.not_finite + m.joint_limit + m.rate_limit,
                         m.other
                     ));
@@ -409,17 +412,20 @@ pub fn markdown(
     }
     s.push_str("\n## Runs the checker rejects\n\n");
     if unsafe_runs.is_empty() {
-        s.push_str("None: no collision (rows or between rows), NaN, joint- or rate-limit violation in any run.\n");
+        s.push_str("None: no collision or contact (rows or between rows), NaN, joint- or rate-limit violation in any run.\n");
     } else {
         let _ = writeln!(
             s,
-            "{} runs. *At rows*: configurations the planner recorded with a point inside an inflated \
-             obstacle; *between rows*: dense points on the straight joint-space segment between two \
-             recorded configurations, both clear, that are inside (the step jumped through a corner); \
-             *closest*: the smallest `C - 1` seen.\n",
+            "{} runs. *Collisions at rows*: recorded configurations with a point inside an inflated \
+             obstacle by more than rounding (`C - 1 <= -1e-4`); *between rows*: dense points on the \
+             straight joint-space segment between two recorded configurations, both clear, that are \
+             inside (the step jumped through an edge or a corner); *contacts*: configurations with \
+             `-1e-4 < C - 1 <= 0`, on the inflated surface within what the planner's `f32` arithmetic \
+             decides (`capp check`'s exact test rejects them too; the margins, 3 to 6 in for PIPS, \
+             are what keeps the arm off the real surface); *closest*: the smallest `C - 1` seen.\n",
             unsafe_runs.len()
         );
-        s.push_str("| case | variant | outcome | collisions at rows | collisions between rows | closest C - 1 | limit / NaN violations | other |\n|---|---|---|---|---|---|---|---|\n");
+        s.push_str("| case | variant | outcome | collisions at rows | collisions between rows | contacts within rounding | closest C - 1 | limit / NaN violations | other |\n|---|---|---|---|---|---|---|---|---|\n");
         for line in unsafe_runs {
             let _ = writeln!(s, "{line}");
         }
@@ -484,7 +490,7 @@ pub fn markdown(
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,not_finite,joint_limit,rate_limit,other,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
     for r in results {
@@ -509,7 +515,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{tail},",
                         capp_sim::output::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -522,6 +528,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                         o(m.closest),
                         m.collisions,
                         m.collisions_between,
+                        m.contacts,
                         m.not_finite,
                         m.joint_limit,
                         m.rate_limit,

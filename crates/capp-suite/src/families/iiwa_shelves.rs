@@ -55,7 +55,7 @@ pub fn joints() -> Vec<DhJoint> {
 const READY: [f64; 7] = [0.0, 0.5, 0.0, -1.4, 0.0, 1.2, 0.0];
 
 fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
-    let from_ready = index % 2 == 0;
+    let from_ready = index.is_multiple_of(2);
     let ready: Vec<f64> = READY.iter().map(|&x| crate::case::round(x)).collect();
     let name = format!("iiwa_shelves-{index:03}");
     let mut draft = Draft::new(Spec {
@@ -172,7 +172,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
         boxed("in the way (end-effector path)"),
     ) as usize;
     let tags = format!(
-        "start {}, {boards} boards, {} obstacles ({placed} in the way)",
+        "start {}; {boards} boards; {} obstacles ({placed} in the way)",
         if at_ready { "ready" } else { "random" },
         draft.spec.obstacles.len()
     );

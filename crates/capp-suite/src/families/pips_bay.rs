@@ -172,7 +172,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
     ) as usize;
 
     let tags = format!(
-        "tol {tol}/{otol}, start {}, {} obstacles ({placed} in the way)",
+        "tol {tol}/{otol}; start {}; {} obstacles ({placed} in the way)",
         if from_home { "home" } else { "random" },
         draft.spec.obstacles.len()
     );

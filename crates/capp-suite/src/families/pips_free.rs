@@ -19,7 +19,7 @@ pub const FAMILY: Family = Family {
 };
 
 fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
-    let from_home = index % 2 == 0;
+    let from_home = index.is_multiple_of(2);
     let home = home();
     let name = format!("pips_free-{index:03}");
     let draft = Draft::new(Spec {
