@@ -53,6 +53,8 @@ pub struct RunMetrics {
     pub straight_time: f64,
     /// Steps after the last row outside 10x the tolerances (reached runs).
     pub steps_10x: Option<u32>,
+    /// Position error at the start (the planner's, row 0).
+    pub initial_position_error: f64,
     /// Exact final position error.
     pub final_position_error: f64,
     /// Exact final orientation error, when the target has an orientation.
@@ -199,6 +201,10 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         same_path_time,
         straight_time,
         steps_10x,
+        initial_position_error: result
+            .rows
+            .first()
+            .map_or(f64::NAN, |r| r.position_error as f64),
         final_position_error: report.final_position_error,
         final_orientation_error: report.final_orientation_error,
         closest,

@@ -168,8 +168,14 @@ impl<'a> Tally<'a> {
         if self.errors > 0 {
             errors = format!(" ({} refused)", self.errors);
         }
+        let unconfirmed = self.reached().filter(|(_, m)| !m.reaches).count();
+        let unconfirmed = if unconfirmed > 0 {
+            format!(" ({unconfirmed} not confirmed by the checker)")
+        } else {
+            String::new()
+        };
         format!(
-            "| {lead} | {}{errors} | {} | {} | {} | {} | {} | {}{} | {} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
+            "| {lead} | {}{errors} | {} | {}{unconfirmed} | {} | {} | {} | {}{} | {} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
             self.cases,
             self.certified,
             reached,
@@ -279,7 +285,7 @@ pub fn markdown(
     // Per family and variant.
     s.push_str("\n## Per family and variant\n\n");
     let _ = writeln!(s, "| family | variant {TABLE_HEAD}");
-    let _ = writeln!(s, "|---{TABLE_RULE}");
+    let _ = writeln!(s, "|---|---{TABLE_RULE}");
     let all: Vec<&CaseResult> = results.iter().collect();
     for f in families {
         let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
@@ -297,7 +303,7 @@ pub fn markdown(
 
     s.push_str("\n## Overall\n\n");
     let _ = writeln!(s, "| variant {TABLE_HEAD}");
-    let _ = writeln!(s, "{TABLE_RULE}");
+    let _ = writeln!(s, "|---{TABLE_RULE}");
     for v in variants {
         let _ = writeln!(s, "{}", Tally::new(&all, v.name).row(v.name));
     }
@@ -351,6 +357,30 @@ pub fn markdown(
         .collect();
     if !uncertified.is_empty() {
         let _ = writeln!(s, "\nNot certified: {}.", uncertified.join(", "));
+    }
+    let solved_anyway: Vec<String> = results
+        .iter()
+        .filter(|r| !certified(r))
+        .filter_map(|r| {
+            let by: Vec<&str> = r
+                .runs
+                .iter()
+                .filter(|v| {
+                    v.metrics
+                        .as_ref()
+                        .is_ok_and(|m| m.outcome == Outcome::Reached)
+                })
+                .map(|v| v.variant.name)
+                .collect();
+            (!by.is_empty()).then(|| format!("{} ({})", r.case.name, by.join(", ")))
+        })
+        .collect();
+    if !solved_anyway.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nNot certified but reached by the planner (so solvable: the oracle's budget was too small): {}.",
+            solved_anyway.join(", ")
+        );
     }
 
     // Shipped scenarios.
@@ -431,47 +461,61 @@ pub fn markdown(
         }
     }
 
-    // Stalled cases of the default variant.
+    // Dead ends of the default variant.
     if let Some(default) = variants.first() {
-        let stalled: Vec<(&CaseResult, &RunMetrics)> = results
+        const PER_FAMILY: usize = 12;
+        let missed = |r: &CaseResult| -> Option<RunMetrics> {
+            let m = r.runs.iter().find(|v| v.variant.name == default.name)?;
+            let m = m.metrics.as_ref().ok()?;
+            (m.outcome != Outcome::Reached).then(|| m.clone())
+        };
+        let total = results
             .iter()
-            .filter_map(|r| {
-                let m = r.runs.iter().find(|v| v.variant.name == default.name)?;
-                let m = m.metrics.as_ref().ok()?;
-                (m.outcome != Outcome::Reached).then_some((r, m))
-            })
-            .collect();
+            .filter(|r| certified(r) && missed(r).is_some())
+            .count();
         let _ = writeln!(
             s,
-            "\n## Cases `{}` did not reach ({})\n\n\
-             For studying dead ends: the final errors (exact, by the checker's kinematics) and the \
-             closest approach over the run (`C - 1`; 0 is the inflated surface).\n\n\
-             | case | what | outcome | steps | final position error | final orientation error | closest C - 1 | RRT |\n|---|---|---|---|---|---|---|---|",
+            "\n## Dead ends: certified cases `{}` did not reach ({total})\n\n\
+             The oracle found a path, the planner did not: what the next issues are judged on. \
+             Final errors are exact (the checker's kinematics), *closest* is the smallest `C - 1` \
+             over the run (0: the inflated surface). At most {PER_FAMILY} per family here; \
+             `target/suite/results.csv` has every run and `target/suite/cases/` every file.\n\n\
+             | case | what | outcome | steps | position error: start -> end | final orientation error | closest C - 1 |\n|---|---|---|---|---|---|---|",
             default.name,
-            stalled.len()
         );
-        for (r, m) in stalled {
-            let unit = if r.case.family.starts_with("pips") {
-                "in"
-            } else {
-                "m"
-            };
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {:.3} {unit} | {} | {} | {} |",
-                r.case.name,
-                r.case.tags,
-                capp_sim::output::outcome_name(m.outcome),
-                grouped(m.steps as f64),
-                m.final_position_error,
-                opt(m.final_orientation_error, 3),
-                opt(m.closest, 4),
-                if certified(r) {
-                    "certified"
+        for f in families {
+            let of: Vec<(&CaseResult, RunMetrics)> = results
+                .iter()
+                .filter(|r| r.case.family == f.name && certified(r))
+                .filter_map(|r| missed(r).map(|m| (r, m)))
+                .collect();
+            for (r, m) in of.iter().take(PER_FAMILY) {
+                let unit = if r.case.family.starts_with("pips") {
+                    "in"
                 } else {
-                    "not certified"
-                },
-            );
+                    "m"
+                };
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {:.3} -> {:.3} {unit} | {} | {} |",
+                    r.case.name,
+                    r.case.tags,
+                    capp_sim::output::outcome_name(m.outcome),
+                    grouped(m.steps as f64),
+                    m.initial_position_error,
+                    m.final_position_error,
+                    opt(m.final_orientation_error, 3),
+                    m.closest.map_or("-".into(), |c| format!("{c:.2e}")),
+                );
+            }
+            if of.len() > PER_FAMILY {
+                let _ = writeln!(
+                    s,
+                    "| ... | {} more in `{}` | | | | | |",
+                    of.len() - PER_FAMILY,
+                    f.name
+                );
+            }
         }
     }
 

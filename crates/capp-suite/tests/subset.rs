@@ -270,3 +270,42 @@ fn known_defect_no_step_jumps_through_an_obstacle_at_iiwa_rates() {
         .unwrap();
     assert_eq!(m.collisions_between, 0, "closest C - 1 {:?}", m.closest);
 }
+
+#[test]
+fn report_tables_are_well_formed() {
+    use capp_suite::report::{self, RunInfo};
+    let f = family("planar_posts");
+    let budget = Budget {
+        iterations: 300,
+        nodes: 2000,
+        shortcuts: 10,
+    };
+    let results: Vec<_> = families::cases(&f, SEED, 3)
+        .unwrap()
+        .iter()
+        .map(|c| runner::run_case(c, &variants(), SEED, Some(budget)))
+        .collect();
+    let info = RunInfo {
+        seed: SEED,
+        counts: vec![(f.name.to_string(), 3)],
+        threads: 1,
+        machine: "test".into(),
+        wall_s: 0.0,
+        budget,
+        command: "test".into(),
+    };
+    let text = report::markdown(&info, &[f], &variants(), &results, &[]);
+    let mut tables = 0;
+    let mut columns: Option<usize> = None;
+    for line in text.lines() {
+        if line.starts_with('|') {
+            let n = line.matches('|').count();
+            assert_eq!(*columns.get_or_insert(n), n, "{line}");
+        } else {
+            tables += columns.take().is_some() as usize;
+        }
+    }
+    assert!(tables >= 4, "{text}");
+    let csv = report::csv(&results);
+    assert_eq!(csv.lines().count(), 1 + 3 * variants().len());
+}
