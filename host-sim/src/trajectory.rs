@@ -40,6 +40,32 @@ pub struct Trajectory {
     pub rows: Vec<TrajectoryRow>,
 }
 
+impl Trajectory {
+    /// The rows of a plan, as a trajectory file would give them back (the
+    /// `f32` values widened exactly; `line` is the row's line in a CSV with a
+    /// header).
+    pub fn from_rows(rows: &[crate::plan::Row]) -> Trajectory {
+        Trajectory {
+            joints: rows.first().map_or(0, |r| r.q.len()),
+            rows: rows
+                .iter()
+                .enumerate()
+                .map(|(i, r)| TrajectoryRow {
+                    line: i + 2,
+                    step: r.step as u64,
+                    h: r.h as f64,
+                    q: r.q.iter().map(|&x| x as f64).collect(),
+                    position: Some(r.position.map(f64::from)),
+                    v: Some(r.v as f64),
+                    position_error: Some(r.position_error as f64),
+                    orientation_error: Some(r.orientation_error as f64),
+                    clearance: r.clearance.map(|c| c.value as f64),
+                })
+                .collect(),
+        }
+    }
+}
+
 /// Reads a trajectory CSV.
 pub fn read(path: &Path) -> Result<Trajectory, LoadError> {
     let text = std::fs::read_to_string(path)

@@ -11,6 +11,13 @@
 //! * `cargo xtask bench --quick`: a smoke check in well under a minute of
 //!   measuring: short criterion runs, a short sweep, the M4F counts, no
 //!   end-to-end test; prints the tables, writes nothing.
+//! * `cargo xtask suite`: the planning-quality benchmark (`crates/capp-suite`):
+//!   seeded case families, RRT-Connect as the oracle, every planner variant on
+//!   every case; writes `PLANNING.md`, `target/suite/results.csv` and the
+//!   cases that were not reached (`target/suite/cases/`). A few minutes.
+//!   `--quick` plans 4 cases per family and prints, writing nothing; see
+//!   `capp_suite::cli` for `--seed`, `--family`, `--variant`, `--cases`,
+//!   `--write-cases DIR`.
 
 mod m4f;
 mod plot;
@@ -28,8 +35,12 @@ fn main() -> Result<()> {
             let quick = args.iter().any(|a| a == "--quick");
             bench(quick)
         }
+        Some("suite") => capp_suite::cli::main(&args[1..], &root()),
         _ => {
-            eprintln!("usage: cargo xtask bench [--quick]");
+            eprintln!(
+                "usage: cargo xtask bench [--quick]\n       {}",
+                &capp_suite::cli::USAGE[7..]
+            );
             std::process::exit(2);
         }
     }

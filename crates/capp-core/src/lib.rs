@@ -16,15 +16,21 @@
 //! | [`kinematics`] | forward kinematics and exact Jacobian-transpose products (eqs. 6, 14) |
 //! | [`obstacle`] | super-ellipsoid obstacles, their inside-outside function and its gradient (eq. 25) |
 //! | [`avoidance`] | avoidance points on the arm, the potential of eq. 26 and its joint-space gradient (eq. 20) |
-//! | [`control`] | the Lyapunov law (eqs. 11-15) and the joint weighting (eq. 18) |
+//! | [`control`] | the laws that drive the end effector: the Lyapunov law (eqs. 11-15), the gradient law, the joint weighting (eq. 18); [`control::damped`], damped least squares on `V` (the default) |
+//! | [`linalg`] | the 6 x 6 symmetric positive definite solve the damped law needs |
 //! | [`projection`] | keeping the joint rate orthogonal to the obstacle gradient (eqs. 22-24) |
+//! | [`step_size`] | how long a step is: the listing's rule, its bounds, conservative advancement |
 //! | [`mission`] | waypoints, tolerances and planner settings |
 //! | [`scenario`] | robot + obstacles + mission, validated together |
-//! | [`planner`] | the per-step state machine: rates, step size, integration, outcome |
+//! | [`planner`] | the per-step state machine: law, step size, integration, acceptance, outcome |
 //! | [`setpoint`] | decimation of the joint stream, as the listing's `joints.dat` |
 //!
 //! Units: angles in radians, lengths in whatever unit the robot is described in
-//! (PIPS: inches), time in seconds. Rates are per second.
+//! (PIPS: inches), time in seconds. Rates are per second. The planner's
+//! length-valued defaults are fractions of the robot's reach
+//! ([`Settings::for_robot`]), and the default law measures joint motion in
+//! seconds at the rate limits, so a robot written in another unit plans the
+//! same motion (`tests/units.rs`).
 //!
 //! ## Rules
 //!

@@ -1,5 +1,15 @@
-//! The Lyapunov law that drives the end effector (paper section 3) and the
-//! joint weighting (section 4).
+//! The laws that drive the end effector (paper section 3) and the joint
+//! weighting (section 4). Three laws, chosen by [`LawKind`]:
+//!
+//! * [`LawKind::DampedLeastSquares`] (the default, [`damped`]): a
+//!   Levenberg-Marquardt step on `V` in the metric of the rate limits and eq.
+//!   18, at the joints' speed: tens of steps, unit-invariant;
+//! * [`LawKind::Gradient`] ([`weighted_rate`]): the normalised total gradient,
+//!   a first-order descent on `V`;
+//! * [`LawKind::Paper`] ([`weighted_rate`]): eq. 15 as printed.
+//!
+//! This module holds what they share (the target, the pose error, the
+//! Jacobian-transpose terms, eq. 18) and the two first-order laws.
 //!
 //! Target `T_target` has columns `r_T1..r_T3` (orientation) and `r_T4`
 //! (position); the end effector's are `r_n1..r_n4`. Errors and energy:
@@ -12,7 +22,7 @@
 //! ```
 //!
 //! The orientation terms (`i = 1..3`) are present only when the target has an
-//! orientation. What we add to eq. 15, and why:
+//! orientation. What the first-order laws add to eq. 15, and why:
 //!
 //! * **weights**: the orientation terms carry `orientation_weight` (the
 //!   listing used 10 on un-normalised terms).

@@ -1,0 +1,268 @@
+//! A benchmark case: an ordinary scenario file (TOML, `host-sim/docs/scenario.md`)
+//! and the goal configuration its target was computed from.
+//!
+//! [`Spec`] writes the file. Angles are radians and every number is written
+//! as the `f32` the loader will read, so the start in the file, the start the
+//! planner gets and the start the oracle checks are the same values. Settings
+//! not written take the loader's defaults (sized in inches, converted for
+//! metres), so the suite follows when the defaults change.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use capp_sim::{scenario_file, LoadError, Problem};
+
+/// Length unit of a case file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// Inches (PIPS).
+    Inches,
+    /// Metres (the iiwa and the planar arm).
+    Metres,
+}
+
+impl Unit {
+    /// The `[units] length` value.
+    pub fn toml(self) -> &'static str {
+        match self {
+            Unit::Inches => "inches",
+            Unit::Metres => "metres",
+        }
+    }
+
+    /// Short label ("in", "m").
+    pub fn label(self) -> &'static str {
+        match self {
+            Unit::Inches => "in",
+            Unit::Metres => "m",
+        }
+    }
+}
+
+/// One revolute joint of a DH table (radians, the file's length unit).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DhJoint {
+    /// Name.
+    pub name: &'static str,
+    /// Link twist.
+    pub alpha: f64,
+    /// Link length.
+    pub a: f64,
+    /// Offset.
+    pub d: f64,
+    /// Home angle.
+    pub theta: f64,
+    /// Limits.
+    pub min: f64,
+    /// Limits.
+    pub max: f64,
+    /// Rate limit per second.
+    pub max_rate: f64,
+}
+
+/// The robot of a case.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RobotSpec {
+    /// The loader's PIPS preset (Table 1).
+    Pips,
+    /// A revolute DH table.
+    Table(Vec<DhJoint>),
+}
+
+/// A super-ellipsoid (eq. 25), lengths in the file's unit, Euler angles in radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Obstacle {
+    /// Name (says what it is: "floor", "shelf board 2", "in the way (joint path)").
+    pub name: String,
+    /// Centre.
+    pub centre: [f64; 3],
+    /// Semi-axes.
+    pub semi_axes: [f64; 3],
+    /// Exponents.
+    pub exponents: [f64; 3],
+    /// 1-2-3 Euler angles, `R = Rz Ry Rx`.
+    pub euler: [f64; 3],
+}
+
+impl Obstacle {
+    /// A box (exponent 8), axis aligned.
+    pub fn cuboid(name: impl Into<String>, centre: [f64; 3], semi_axes: [f64; 3]) -> Self {
+        Obstacle {
+            name: name.into(),
+            centre,
+            semi_axes,
+            exponents: [8.0; 3],
+            euler: [0.0; 3],
+        }
+    }
+
+    /// A cylinder along axis `axis` (0 = x, 1 = y, 2 = z): flat ends (8), round section (2).
+    pub fn cylinder(
+        name: impl Into<String>,
+        centre: [f64; 3],
+        axis: usize,
+        radius: f64,
+        half_length: f64,
+    ) -> Self {
+        let mut semi_axes = [radius; 3];
+        semi_axes[axis] = half_length;
+        let mut exponents = [2.0; 3];
+        exponents[axis] = 8.0;
+        Obstacle {
+            name: name.into(),
+            centre,
+            semi_axes,
+            exponents,
+            euler: [0.0; 3],
+        }
+    }
+
+    /// The same obstacle turned by `rz` about the world z axis through the origin.
+    pub fn turned(mut self, rz: f64) -> Self {
+        let (s, c) = libm::sincos(rz);
+        let [x, y, z] = self.centre;
+        self.centre = [c * x - s * y, s * x + c * y, z];
+        self.euler[2] += rz;
+        self
+    }
+}
+
+/// Everything a case file says.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spec {
+    /// `name`.
+    pub name: String,
+    /// `description`.
+    pub description: String,
+    /// Comment lines written at the top (without `#`).
+    pub comments: Vec<String>,
+    /// Length unit.
+    pub unit: Unit,
+    /// Robot.
+    pub robot: RobotSpec,
+    /// Start configuration (radians / length units).
+    pub start: Vec<f64>,
+    /// Target position.
+    pub target: [f64; 3],
+    /// Target orientation, rows of the rotation matrix, or none.
+    pub orientation: Option<[[f64; 3]; 3]>,
+    /// Obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// `[settings]` lines, `key = value`, in the file's units.
+    pub settings: Vec<(String, String)>,
+}
+
+/// `x` as the `f32` the loader reads, in a form that reads back to that `f32`.
+pub fn num(x: f64) -> String {
+    format!("{:?}", x as f32)
+}
+
+/// `x` rounded to the `f32` the loader will read.
+pub fn round(x: f64) -> f64 {
+    x as f32 as f64
+}
+
+fn list(values: &[f64]) -> String {
+    let items: Vec<String> = values.iter().map(|&v| num(v)).collect();
+    format!("[{}]", items.join(", "))
+}
+
+impl Spec {
+    /// The scenario file.
+    pub fn to_toml(&self) -> String {
+        let mut s = String::new();
+        for c in &self.comments {
+            let _ = writeln!(s, "# {c}");
+        }
+        let _ = writeln!(s, "name = \"{}\"", self.name);
+        let _ = writeln!(
+            s,
+            "description = \"\"\"\n{}\n\"\"\"",
+            self.description.trim()
+        );
+        let _ = writeln!(s, "start = {}", list(&self.start));
+        let _ = writeln!(
+            s,
+            "\n[units]\nangle = \"radians\"\nlength = \"{}\"",
+            self.unit.toml()
+        );
+        match &self.robot {
+            RobotSpec::Pips => s.push_str("\n[robot]\npreset = \"pips\"\n"),
+            RobotSpec::Table(joints) => {
+                for j in joints {
+                    let _ = writeln!(
+                        s,
+                        "\n[[robot.joints]]\nname = \"{}\"\ntype = \"revolute\"\nalpha = {}\na = {}\nd = {}\ntheta = {}\nmin = {}\nmax = {}\nmax_rate = {}",
+                        j.name,
+                        num(j.alpha),
+                        num(j.a),
+                        num(j.d),
+                        num(j.theta),
+                        num(j.min),
+                        num(j.max),
+                        num(j.max_rate)
+                    );
+                }
+            }
+        }
+        let _ = writeln!(s, "\n[target]\nposition = {}", list(&self.target));
+        if let Some(m) = &self.orientation {
+            let _ = writeln!(
+                s,
+                "matrix = [{}, {}, {}]",
+                list(&m[0]),
+                list(&m[1]),
+                list(&m[2])
+            );
+        }
+        for o in &self.obstacles {
+            let _ = writeln!(
+                s,
+                "\n[[obstacles]]\nname = \"{}\"\ncentre = {}\nsemi_axes = {}\nexponents = {}",
+                o.name,
+                list(&o.centre),
+                list(&o.semi_axes),
+                list(&o.exponents)
+            );
+            if o.euler != [0.0; 3] {
+                let _ = writeln!(s, "euler = {}", list(&o.euler));
+            }
+        }
+        if !self.settings.is_empty() {
+            s.push_str("\n[settings]\n");
+            for (k, v) in &self.settings {
+                let _ = writeln!(s, "{k} = {v}");
+            }
+        }
+        s
+    }
+
+    /// The file as the loader reads it (not validated).
+    pub fn parse(&self) -> Result<Problem, LoadError> {
+        parse(&self.to_toml(), &self.name)
+    }
+}
+
+/// Parses scenario text as `capp run` would read `<name>.toml`.
+pub fn parse(text: &str, name: &str) -> Result<Problem, LoadError> {
+    scenario_file::parse(text, Path::new(&format!("{name}.toml")))
+}
+
+/// A generated case.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    /// Family name.
+    pub family: &'static str,
+    /// Index within the family.
+    pub index: usize,
+    /// `family-index`, also the scenario's `name`.
+    pub name: String,
+    /// What varies in this case, in a few words.
+    pub tags: String,
+    /// The scenario file.
+    pub text: String,
+    /// Start configuration, as in the file.
+    pub start: Vec<f64>,
+    /// Goal configuration: collision free, within limits; the target is its pose.
+    pub goal: Vec<f64>,
+}

@@ -1,0 +1,256 @@
+//! What every family does the same way: a draft scene with its independent
+//! geometry, random configurations within limits and clear of it, obstacles
+//! placed in the way, and the finished, re-read and validated case file.
+
+use capp_core::SuperEllipsoid;
+use capp_sim::check::{forward, Geometry};
+use capp_sim::Problem;
+
+use crate::case::{self, round, Case, Obstacle, Spec};
+use crate::rng::Rng;
+
+/// `C - 1` every avoidance point of a start or goal keeps from every inflated
+/// obstacle (by the independent `f64` checker): far above `f32` rounding, so
+/// the planner never refuses a start the checker accepts.
+pub const CLEAR_MARGIN: f64 = 0.02;
+
+/// A scene under construction: the spec and the problem the loader makes of
+/// it (obstacles are added to both in the same `f32` values).
+pub struct Draft {
+    /// The file so far (its start and target are placeholders until [`Draft::finish`]).
+    pub spec: Spec,
+    problem: Problem,
+    geometry: Geometry,
+}
+
+impl Draft {
+    /// A draft from `spec` (start: any valid configuration, e.g. home).
+    pub fn new(spec: Spec) -> Option<Draft> {
+        let problem = spec.parse().ok()?;
+        let geometry = Geometry::new(&problem);
+        Some(Draft {
+            spec,
+            problem,
+            geometry,
+        })
+    }
+
+    /// The loaded problem of the draft.
+    pub fn problem(&self) -> &Problem {
+        &self.problem
+    }
+
+    /// Joint limits.
+    pub fn limits(&self) -> Vec<(f64, f64)> {
+        self.problem
+            .joints
+            .iter()
+            .map(|j| (j.min as f64, j.max as f64))
+            .collect()
+    }
+
+    /// Adds an obstacle.
+    pub fn push(&mut self, o: Obstacle) {
+        self.problem.obstacles.push(SuperEllipsoid {
+            centre: o.centre.map(|x| x as f32),
+            semi_axes: o.semi_axes.map(|x| x as f32),
+            exponents: o.exponents.map(|x| x as f32),
+            euler_123: o.euler.map(|x| x as f32),
+        });
+        self.problem.obstacle_names.push(o.name.clone());
+        self.spec.obstacles.push(o);
+        self.geometry = Geometry::new(&self.problem);
+    }
+
+    /// Removes the last obstacle.
+    pub fn pop(&mut self) {
+        self.problem.obstacles.pop();
+        self.problem.obstacle_names.pop();
+        self.spec.obstacles.pop();
+        self.geometry = Geometry::new(&self.problem);
+    }
+
+    /// Whether `q` is within limits and clear of every obstacle by [`CLEAR_MARGIN`].
+    pub fn clear(&self, q: &[f64]) -> bool {
+        within_limits(&self.problem, q) && self.geometry.is_clear(q, CLEAR_MARGIN)
+    }
+
+    /// Adds `o` if every configuration in `keep` stays clear; returns whether it did.
+    pub fn push_if_clear(&mut self, o: Obstacle, keep: &[&[f64]]) -> bool {
+        self.push(o);
+        if keep.iter().all(|q| self.clear(q)) {
+            true
+        } else {
+            self.pop();
+            false
+        }
+    }
+
+    /// A random configuration within `fraction` of every joint's range about
+    /// its middle, clear of the scene (`tries` draws at most).
+    pub fn random_clear(&self, rng: &mut Rng, fraction: f64, tries: usize) -> Option<Vec<f64>> {
+        let limits = self.limits();
+        (0..tries)
+            .map(|_| random_config(rng, &limits, fraction))
+            .find(|q| self.clear(q))
+    }
+
+    /// A random clear configuration whose end effector is at least `min_move`
+    /// from that of `from`.
+    pub fn random_goal(
+        &self,
+        rng: &mut Rng,
+        from: &[f64],
+        fraction: f64,
+        min_move: f64,
+        tries: usize,
+    ) -> Option<Vec<f64>> {
+        let p0 = end_pose(&self.problem, from).0;
+        let limits = self.limits();
+        (0..tries)
+            .map(|_| random_config(rng, &limits, fraction))
+            .find(|q| dist(end_pose(&self.problem, q).0, p0) >= min_move && self.clear(q))
+    }
+
+    /// Places obstacles made by `make(rng, centre, scale)` at points drawn
+    /// from `candidates`, keeping start and goal clear: up to `tries`
+    /// candidates, each shrunk (scale 1, 0.7, 0.49, 0.34) until it fits.
+    /// Returns whether one was placed.
+    pub fn place(
+        &mut self,
+        rng: &mut Rng,
+        candidates: &[[f64; 3]],
+        keep: &[&[f64]],
+        tries: usize,
+        make: impl Fn(&mut Rng, [f64; 3], f64) -> Obstacle,
+    ) -> bool {
+        if candidates.is_empty() {
+            return false;
+        }
+        for _ in 0..tries {
+            let centre = candidates[rng.below(candidates.len())];
+            let mut scale = 1.0;
+            for _ in 0..4 {
+                if self.push_if_clear(make(rng, centre, scale), keep) {
+                    return true;
+                }
+                scale *= 0.7;
+            }
+        }
+        false
+    }
+
+    /// Writes the case: `start`, the target from `goal`'s forward kinematics
+    /// (with its orientation when `orientation`), reads the file back as
+    /// `capp run` would, and checks everything once more on what was read:
+    /// the loader and `Planner::new` accept it, start and goal are clear.
+    pub fn finish(
+        mut self,
+        family: &'static str,
+        index: usize,
+        tags: String,
+        start: &[f64],
+        goal: &[f64],
+        orientation: bool,
+    ) -> Option<Case> {
+        let (position, rotation) = end_pose(&self.problem, goal);
+        self.spec.start = start.to_vec();
+        self.spec.target = position;
+        self.spec.orientation = orientation.then_some(rotation);
+        self.spec.comments.push(format!(
+            "goal configuration (radians / {}; collision free, the target is its pose):",
+            self.spec.unit.label()
+        ));
+        let goal_text: Vec<String> = goal.iter().map(|&g| case::num(g)).collect();
+        self.spec
+            .comments
+            .push(format!("goal = [{}]", goal_text.join(", ")));
+        let text = self.spec.to_toml();
+        let problem = case::parse(&text, &self.spec.name).ok()?;
+        problem.validate().ok()?;
+        let geometry = Geometry::new(&problem);
+        let start_read: Vec<f64> = problem.start.iter().map(|&x| x as f64).collect();
+        let ok = |q: &[f64]| within_limits(&problem, q) && geometry.is_clear(q, CLEAR_MARGIN);
+        if start_read != start || !ok(start) || !ok(goal) {
+            return None;
+        }
+        Some(Case {
+            family,
+            index,
+            name: self.spec.name.clone(),
+            tags,
+            text,
+            start: start.to_vec(),
+            goal: goal.to_vec(),
+        })
+    }
+}
+
+/// Whether `q` is within the joint limits of `problem`.
+pub fn within_limits(problem: &Problem, q: &[f64]) -> bool {
+    q.len() == problem.joints.len()
+        && problem
+            .joints
+            .iter()
+            .zip(q)
+            .all(|(j, &x)| x >= j.min as f64 && x <= j.max as f64)
+}
+
+/// Uniform within `fraction` of each range about its middle, as `f32` values.
+pub fn random_config(rng: &mut Rng, limits: &[(f64, f64)], fraction: f64) -> Vec<f64> {
+    limits
+        .iter()
+        .map(|&(lo, hi)| {
+            let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+            round(mid + fraction * half * rng.range(-1.0, 1.0)).clamp(lo, hi)
+        })
+        .collect()
+}
+
+/// End-effector position and rotation (rows) at `q`, `f64` (the checker's kinematics).
+pub fn end_pose(problem: &Problem, q: &[f64]) -> ([f64; 3], [[f64; 3]; 3]) {
+    let (_, t) = forward(problem, q);
+    (
+        [t[0][3], t[1][3], t[2][3]],
+        [0, 1, 2].map(|i| [t[i][0], t[i][1], t[i][2]]),
+    )
+}
+
+/// Frame origins `o_1..o_n` and link mid-points at `q`, skipping the first
+/// `skip` links (the pedestal or the base, which cannot get out of the way).
+pub fn arm_points(problem: &Problem, q: &[f64], skip: usize) -> Vec<[f64; 3]> {
+    let (o, _) = forward(problem, q);
+    let mut points = Vec::new();
+    for k in skip..o.len().saturating_sub(1) {
+        let (a, b) = (o[k], o[k + 1]);
+        points.push([
+            0.5 * (a[0] + b[0]),
+            0.5 * (a[1] + b[1]),
+            0.5 * (a[2] + b[2]),
+        ]);
+        points.push(b);
+    }
+    points
+}
+
+/// The joint-space midpoint of `a` and `b`.
+pub fn midpoint(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect()
+}
+
+/// Points on the straight end-effector path from `a`'s pose to `b`'s, in
+/// its middle part (`t` in 0.3 to 0.7).
+pub fn end_path_points(problem: &Problem, a: &[f64], b: &[f64]) -> Vec<[f64; 3]> {
+    let (pa, pb) = (end_pose(problem, a).0, end_pose(problem, b).0);
+    (0..5)
+        .map(|i| {
+            let t = 0.3 + 0.1 * i as f64;
+            [0, 1, 2].map(|k| pa[k] + t * (pb[k] - pa[k]))
+        })
+        .collect()
+}
+
+/// Euclidean distance.
+pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    libm::sqrt((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+}

@@ -1,0 +1,221 @@
+//! What one planner run is measured by. Everything about safety comes from
+//! the independent `f64` checker (`capp_sim::check`), never from the
+//! planner's own flags: every recorded row is checked (limits, rates, NaN,
+//! kinematics, clearance), and so is the straight joint-space segment between
+//! consecutive rows, at points no more than [`DENSE_STEP`] apart in any joint,
+//! so a step that jumps through an obstacle is counted even if both its ends
+//! are clear.
+//!
+//! Times: `motion_time` is the sum of the step sizes `h`; `same_path_time`
+//! the same path driven at the joints' rate limits, `sum_k max_j |dq_j| /
+//! max_rate_j`; `straight_time` the straight joint-space line from the start
+//! to the final configuration at the rate limits, `max_j |q_end_j -
+//! q_start_j| / max_rate_j`.
+
+use capp_core::Outcome;
+use capp_sim::check::{self, Geometry, ViolationKind};
+use capp_sim::plan::RunResult;
+use capp_sim::trajectory::Trajectory;
+use capp_sim::Problem;
+
+/// Largest move of any joint (radians or length units) between two checked
+/// configurations, in the dense re-check between rows and in the oracle.
+pub const DENSE_STEP: f64 = 0.01;
+
+/// `C - 1` above `-ROUNDING` (and at most 0) is a *contact*: the point is on
+/// the inflated surface within what `f32` arithmetic can decide. The planner
+/// accepts a point when its `f32` evaluation says `C - 1 > 0`; the exact value
+/// can then be a few 1e-6 below 0 (the README's "limits found on the way").
+/// Below `-ROUNDING` (1e-4, ten times the worst rounding of the families'
+/// scales) it is a *collision*: no rounding explains it.
+pub const ROUNDING: f64 = 1.0e-4;
+
+/// How the checker classes one configuration's closest pair.
+fn class(value: f64) -> (bool, bool) {
+    let collision = value.is_nan() || value <= -ROUNDING;
+    (collision, !collision && value <= 0.0)
+}
+
+/// One planner run, measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunMetrics {
+    /// How it ended (the planner's word; `reached` is also re-checked, see `reaches`).
+    pub outcome: Outcome,
+    /// Whether the checker's exact final pose is within the tolerances.
+    pub reaches: bool,
+    /// Steps taken.
+    pub steps: u32,
+    /// Sum of `h`, seconds.
+    pub motion_time: f64,
+    /// The same path at the rate limits, seconds.
+    pub same_path_time: f64,
+    /// The straight joint-space line start -> final configuration at the rate limits, seconds.
+    pub straight_time: f64,
+    /// Steps after the last row outside 10x the tolerances (reached runs).
+    pub steps_10x: Option<u32>,
+    /// Position error at the start (the planner's, row 0).
+    pub initial_position_error: f64,
+    /// Exact final position error.
+    pub final_position_error: f64,
+    /// Exact final orientation error, when the target has an orientation.
+    pub final_orientation_error: Option<f64>,
+    /// Smallest `C - 1` over rows and the dense points between them.
+    pub closest: Option<f64>,
+    /// Checked configurations (rows and between rows) with an avoidance point
+    /// inside an inflated obstacle beyond rounding (`C - 1 <= -ROUNDING`, or NaN).
+    pub collisions: usize,
+    /// Of those, how many were between rows.
+    pub collisions_between: usize,
+    /// Checked configurations touching an inflated surface within rounding
+    /// (`-ROUNDING < C - 1 <= 0`; `capp check`'s exact test counts these too).
+    pub contacts: usize,
+    /// Rows with a NaN or infinite value.
+    pub not_finite: usize,
+    /// Joint-limit violations.
+    pub joint_limit: usize,
+    /// Rate-limit violations.
+    pub rate_limit: usize,
+    /// Any other violation the checker reports (row 0 not the start, kinematics mismatch).
+    pub other: usize,
+    /// Configurations the dense re-check evaluated between rows.
+    pub dense_checks: usize,
+    /// Wall time of the planning loop, milliseconds.
+    pub wall_ms: f64,
+}
+
+impl RunMetrics {
+    /// Violations of every kind that must never happen (contacts within
+    /// rounding are not among them; see [`ROUNDING`]).
+    pub fn violations(&self) -> usize {
+        self.collisions + self.not_finite + self.joint_limit + self.rate_limit + self.other
+    }
+}
+
+/// `max_j |b_j - a_j| / rate_j`: the time from `a` to `b` at the rate limits.
+pub fn rate_time(rates: &[f64], a: &[f64], b: &[f64]) -> f64 {
+    rates
+        .iter()
+        .zip(a.iter().zip(b))
+        .map(|(r, (x, y))| (y - x).abs() / r)
+        .fold(0.0, f64::max)
+}
+
+/// The joints' rate limits.
+pub fn rates(problem: &Problem) -> Vec<f64> {
+    problem.joints.iter().map(|j| j.max_rate as f64).collect()
+}
+
+/// Calls `f` with every point strictly between `a` and `b` on the straight
+/// joint-space segment, no joint moving more than [`DENSE_STEP`] between
+/// consecutive points; stops when `f` returns `false`. Returns how many it visited.
+pub fn between(a: &[f64], b: &[f64], mut f: impl FnMut(&[f64]) -> bool) -> usize {
+    let d = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (y - x).abs())
+        .fold(0.0, f64::max);
+    if !d.is_finite() {
+        return 0;
+    }
+    let steps = (d / DENSE_STEP).ceil() as usize;
+    let mut q = vec![0.0; a.len()];
+    let mut visited = 0;
+    for i in 1..steps {
+        let t = i as f64 / steps as f64;
+        for (k, v) in q.iter_mut().enumerate() {
+            *v = a[k] + t * (b[k] - a[k]);
+        }
+        visited += 1;
+        if !f(&q) {
+            break;
+        }
+    }
+    visited
+}
+
+/// Measures `result`, a run of `problem`.
+pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
+    let trajectory = Trajectory::from_rows(&result.rows);
+    let report = check::check(problem, &trajectory);
+    let count = |kind| report.violations.iter().filter(|v| v.kind == kind).count();
+    let geometry = Geometry::new(problem);
+    let rates = rates(problem);
+    let rows: Vec<Vec<f64>> = trajectory.rows.iter().map(|r| r.q.clone()).collect();
+
+    // The checker reports every point / obstacle pair of a row in collision;
+    // here each configuration is classed once by its closest pair.
+    let mut closest: Option<f64> = None;
+    let (mut collision_rows, mut collisions_between, mut contacts) = (0, 0, 0);
+    let mut visit = |q: &[f64], at_row: bool| {
+        if let Some(c) = geometry.clearance(q) {
+            let (collision, contact) = class(c.value);
+            collision_rows += (collision && at_row) as usize;
+            collisions_between += (collision && !at_row) as usize;
+            contacts += contact as usize;
+            if closest.is_none_or(|m| c.value < m) {
+                closest = Some(c.value);
+            }
+        }
+    };
+    let mut dense_checks = 0;
+    let mut same_path_time = 0.0;
+    if let Some(first) = rows.first() {
+        visit(first, true);
+    }
+    for pair in rows.windows(2) {
+        same_path_time += rate_time(&rates, &pair[0], &pair[1]);
+        dense_checks += between(&pair[0], &pair[1], |q| {
+            visit(q, false);
+            true
+        });
+        visit(&pair[1], true);
+    }
+    let motion_time = trajectory.rows.iter().map(|r| r.h).sum();
+    let straight_time = match (rows.first(), rows.last()) {
+        (Some(a), Some(b)) => rate_time(&rates, a, b),
+        _ => 0.0,
+    };
+
+    let steps = result.steps();
+    let steps_10x = (result.outcome == Outcome::Reached).then(|| {
+        let s = &problem.settings;
+        let oriented = problem
+            .waypoints
+            .last()
+            .is_some_and(|w| w.orientation.is_some());
+        let outside = |r: &capp_sim::plan::Row| {
+            r.position_error > 10.0 * s.position_tolerance
+                || (oriented && r.orientation_error > 10.0 * s.orientation_tolerance)
+        };
+        match result.rows.iter().rposition(outside) {
+            Some(k) => steps - result.rows[k].step,
+            None => steps,
+        }
+    });
+
+    RunMetrics {
+        outcome: result.outcome,
+        reaches: report.reaches_target,
+        steps,
+        motion_time,
+        same_path_time,
+        straight_time,
+        steps_10x,
+        initial_position_error: result
+            .rows
+            .first()
+            .map_or(f64::NAN, |r| r.position_error as f64),
+        final_position_error: report.final_position_error,
+        final_orientation_error: report.final_orientation_error,
+        closest,
+        collisions: collision_rows + collisions_between,
+        collisions_between,
+        contacts,
+        not_finite: count(ViolationKind::NotFinite),
+        joint_limit: count(ViolationKind::JointLimit),
+        rate_limit: count(ViolationKind::RateLimit),
+        other: count(ViolationKind::Shape) + count(ViolationKind::Kinematics),
+        dense_checks,
+        wall_ms: result.wall_time.as_secs_f64() * 1e3,
+    }
+}

@@ -1,0 +1,611 @@
+//! The report: markdown tables per family and variant, overall, the shipped
+//! scenarios, the oracle, the stalled cases; and the per-case CSV.
+//!
+//! Medians and percentiles are nearest-rank over the runs a column names;
+//! times and ratios are over reached runs (a stalled run's time says nothing
+//! about how long a motion takes), counts over every run.
+
+use std::fmt::Write as _;
+
+use capp_core::Outcome;
+
+use crate::families::Family;
+use crate::metrics::RunMetrics;
+use crate::oracle::Budget;
+use crate::runner::CaseResult;
+use crate::variants::Variant;
+
+/// A shipped scenario run with one variant.
+#[derive(Clone, Debug)]
+pub struct ShippedRun {
+    /// File name.
+    pub scenario: String,
+    /// The variant.
+    pub variant: Variant,
+    /// `time_step_s` of the file.
+    pub time_step: f32,
+    /// The run.
+    pub metrics: Result<RunMetrics, String>,
+}
+
+/// What the header says about the run.
+#[derive(Clone, Debug)]
+pub struct RunInfo {
+    /// The seed.
+    pub seed: u64,
+    /// Cases per family, as generated.
+    pub counts: Vec<(String, usize)>,
+    /// Threads used.
+    pub threads: usize,
+    /// CPU and toolchain.
+    pub machine: String,
+    /// Wall time of the whole run, seconds.
+    pub wall_s: f64,
+    /// The oracle's budget.
+    pub budget: Budget,
+    /// The command that made it.
+    pub command: String,
+}
+
+/// Nearest-rank percentile `p` (0..=1) of `values`.
+pub fn percentile(values: &[f64], p: f64) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let rank = ((p * v.len() as f64).ceil() as usize).clamp(1, v.len());
+    Some(v[rank - 1])
+}
+
+/// The median.
+pub fn median(values: &[f64]) -> Option<f64> {
+    percentile(values, 0.5)
+}
+
+/// An integer with thin groups of three ("13 901").
+pub fn grouped(x: f64) -> String {
+    let v = x.round() as i64;
+    let digits = v.unsigned_abs().to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    if v < 0 {
+        format!("-{out}")
+    } else {
+        out
+    }
+}
+
+fn opt(x: Option<f64>, digits: usize) -> String {
+    x.map_or("-".into(), |v| format!("{v:.digits$}"))
+}
+
+fn opt_int(x: Option<f64>) -> String {
+    x.map_or("-".into(), grouped)
+}
+
+fn pct(num: usize, den: usize) -> String {
+    if den == 0 {
+        "-".into()
+    } else {
+        format!("{:.0} %", 100.0 * num as f64 / den as f64)
+    }
+}
+
+/// One row of the family x variant (or overall) table.
+struct Tally<'a> {
+    runs: Vec<(&'a CaseResult, &'a RunMetrics)>,
+    errors: usize,
+    cases: usize,
+    certified: usize,
+}
+
+impl<'a> Tally<'a> {
+    fn new(results: &[&'a CaseResult], variant: &str) -> Self {
+        let mut runs = Vec::new();
+        let mut errors = 0;
+        for r in results {
+            for v in r.runs.iter().filter(|v| v.variant.name == variant) {
+                match &v.metrics {
+                    Ok(m) => runs.push((*r, m)),
+                    Err(_) => errors += 1,
+                }
+            }
+        }
+        Tally {
+            runs,
+            errors,
+            cases: results.len(),
+            certified: results.iter().filter(|r| certified(r)).count(),
+        }
+    }
+
+    fn count(&self, outcome: Outcome) -> usize {
+        self.runs
+            .iter()
+            .filter(|(_, m)| m.outcome == outcome)
+            .count()
+    }
+
+    fn reached(&self) -> impl Iterator<Item = &(&'a CaseResult, &'a RunMetrics)> {
+        self.runs
+            .iter()
+            .filter(|(_, m)| m.outcome == Outcome::Reached)
+    }
+
+    fn reached_values(&self, f: impl Fn(&CaseResult, &RunMetrics) -> Option<f64>) -> Vec<f64> {
+        self.reached().filter_map(|(c, m)| f(c, m)).collect()
+    }
+
+    fn row(&self, lead: &str) -> String {
+        let reached = self.count(Outcome::Reached);
+        let reached_certified = self.reached().filter(|(c, _)| certified(c)).count();
+        let collisions: usize = self.runs.iter().map(|(_, m)| m.collisions).sum();
+        let contacts: usize = self.runs.iter().map(|(_, m)| m.contacts).sum();
+        let broken: usize = self
+            .runs
+            .iter()
+            .map(|(_, m)| m.not_finite + m.joint_limit + m.rate_limit + m.other)
+            .sum();
+        let steps = self.reached_values(|_, m| Some(m.steps as f64));
+        let motion = self.reached_values(|_, m| Some(m.motion_time));
+        let same = self.reached_values(|_, m| ratio(m.motion_time, m.same_path_time));
+        let straight = self.reached_values(|_, m| ratio(m.motion_time, m.straight_time));
+        let vs_rrt = self.reached_values(|c, m| {
+            c.oracle
+                .as_ref()
+                .and_then(|o| o.path_time)
+                .and_then(|t| ratio(m.motion_time, t))
+        });
+        let fine = self.reached_values(|_, m| m.steps_10x.map(|s| s as f64));
+        let wall: Vec<f64> = self.runs.iter().map(|(_, m)| m.wall_ms).collect();
+        let mut errors = String::new();
+        if self.errors > 0 {
+            errors = format!(" ({} refused)", self.errors);
+        }
+        let unconfirmed = self.reached().filter(|(_, m)| !m.reaches).count();
+        let unconfirmed = if unconfirmed > 0 {
+            format!(" ({unconfirmed} not confirmed by the checker)")
+        } else {
+            String::new()
+        };
+        format!(
+            "| {lead} | {}{errors} | {} | {}{unconfirmed} | {} | {} | {} | {}{} | {} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
+            self.cases,
+            self.certified,
+            reached,
+            self.count(Outcome::Stalled),
+            self.count(Outcome::Capped),
+            pct(reached_certified, self.certified),
+            collisions,
+            if broken > 0 { format!(" (+{broken} limit/NaN)") } else { String::new() },
+            contacts,
+            opt_int(median(&steps)),
+            opt_int(percentile(&steps, 0.9)),
+            opt_int(steps.iter().copied().reduce(f64::max)),
+            opt(median(&motion), 1),
+            opt(median(&same), 1),
+            opt(median(&straight), 1),
+            opt(median(&vs_rrt), 1),
+            opt_int(median(&fine)),
+            opt_int(fine.iter().copied().reduce(f64::max)),
+            opt(median(&wall), 1),
+        )
+    }
+}
+
+const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | contacts within rounding | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
+const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+
+fn ratio(a: f64, b: f64) -> Option<f64> {
+    (b > 0.0 && a.is_finite()).then(|| a / b)
+}
+
+/// Whether the oracle certified the case.
+pub fn certified(r: &CaseResult) -> bool {
+    r.oracle.as_ref().is_some_and(|o| o.solved)
+}
+
+/// The markdown report.
+pub fn markdown(
+    info: &RunInfo,
+    families: &[Family],
+    variants: &[Variant],
+    results: &[CaseResult],
+    shipped: &[ShippedRun],
+) -> String {
+    let mut s = String::new();
+    let total: usize = info.counts.iter().map(|c| c.1).sum();
+    let counts: Vec<String> = info
+        .counts
+        .iter()
+        .map(|(f, n)| format!("{f} {n}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "# Planning quality\n\n\
+         Generated by `{}` (`crates/capp-suite`); do not edit by hand, run it again. \
+         Seed {}; {total} cases ({}); variants: {}. Machine: {}; {} threads; the whole run took {:.0} s \
+         (wall times below are per run, with the other thread busy on the same 2 cores: noisy).\n",
+        info.command,
+        info.seed,
+        counts.join(", "),
+        variants.iter().map(|v| format!("`{}`", v.name)).collect::<Vec<_>>().join(", "),
+        info.machine,
+        info.threads,
+        info.wall_s,
+    );
+    s.push_str(
+        "Every case is an ordinary scenario file planned as `capp run` plans it \
+         (`capp-core`, `Planner<32>`); `cargo xtask suite --write-cases DIR` writes them, \
+         and every run that did not reach its target is written to `target/suite/cases/` \
+         with its variant's settings, so `capp run target/suite/cases/NAME.toml` reproduces it. \
+         Collisions, NaN, joint and rate limits are counted by the independent `f64` checker \
+         (`capp_sim::check`), on every row and densely between rows (no joint moving more than \
+         0.01 rad or 0.01 length units between checks), never by the planner's own flags. \
+         Per-case figures: `target/suite/results.csv`.\n\n",
+    );
+    s.push_str("Families:\n\n");
+    for f in families {
+        let _ = writeln!(s, "- `{}`: {}.", f.name, f.description);
+    }
+    s.push_str("\nVariants:\n\n");
+    for v in variants {
+        let settings = if v.settings.is_empty() {
+            "no settings added".to_string()
+        } else {
+            format!("`{}`", v.settings.replace('\n', "`, `"))
+        };
+        let _ = writeln!(s, "- `{}`: {} ({settings}).", v.name, v.description);
+    }
+    let _ = writeln!(
+        s,
+        "\nThe oracle is RRT-Connect in joint space, start to goal configuration \
+         (`crates/capp-suite/src/oracle.rs`): distances in seconds at the rate limits, \
+         every edge checked densely by the same independent checker, at most {} iterations \
+         and {} nodes per case (no time limit, so it repeats on any machine), the path re-checked \
+         densely and shortened by {} random shortcuts. A case it solves is *certified* \
+         solvable; one it does not is *not certified* (perhaps unsolvable, perhaps beyond the budget).\n",
+        info.budget.iterations, info.budget.nodes, info.budget.shortcuts
+    );
+    s.push_str(
+        "Columns: steps, times and ratios are medians over the runs that reached their target; \
+         *same path at rate limits* is `sum_k max_j |dq_j| / max_rate_j` over the run's steps, \
+         *straight line* `max_j |q_end_j - q_start_j| / max_rate_j`, *RRT path* the oracle's \
+         shortcut path at the rate limits (cases both solve); *steps 10x tol -> tol* counts the \
+         steps after the last one whose position error exceeded 10 x the position tolerance \
+         (or orientation error 10 x its tolerance); *wall ms* is the planning loop alone.\n",
+    );
+
+    // Per family and variant.
+    s.push_str("\n## Per family and variant\n\n");
+    let _ = writeln!(s, "| family | variant {TABLE_HEAD}");
+    let _ = writeln!(s, "|---|---{TABLE_RULE}");
+    let all: Vec<&CaseResult> = results.iter().collect();
+    for f in families {
+        let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
+        if of.is_empty() {
+            continue;
+        }
+        for v in variants {
+            let _ = writeln!(
+                s,
+                "{}",
+                Tally::new(&of, v.name).row(&format!("{} | {}", f.name, v.name))
+            );
+        }
+    }
+
+    s.push_str("\n## Overall\n\n");
+    let _ = writeln!(s, "| variant {TABLE_HEAD}");
+    let _ = writeln!(s, "|---{TABLE_RULE}");
+    for v in variants {
+        let _ = writeln!(s, "{}", Tally::new(&all, v.name).row(v.name));
+    }
+
+    // The oracle.
+    s.push_str("\n## RRT-Connect (the oracle)\n\n");
+    s.push_str("| family | cases | certified | certified % | time median / max (ms) | iterations median / max | path as found, median (s at rate limits) | shortcut path, median (s at rate limits) |\n|---|---|---|---|---|---|---|---|\n");
+    let mut oracle_row = |label: &str, of: &[&CaseResult]| {
+        let solved: Vec<&CaseResult> = of.iter().copied().filter(|r| certified(r)).collect();
+        let time: Vec<f64> = of
+            .iter()
+            .filter_map(|r| r.oracle.as_ref().map(|o| o.wall_ms))
+            .collect();
+        let iterations: Vec<f64> = of
+            .iter()
+            .filter_map(|r| r.oracle.as_ref().map(|o| o.iterations as f64))
+            .collect();
+        let raw: Vec<f64> = solved
+            .iter()
+            .filter_map(|r| r.oracle.as_ref()?.raw_time)
+            .collect();
+        let short: Vec<f64> = solved
+            .iter()
+            .filter_map(|r| r.oracle.as_ref()?.path_time)
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {label} | {} | {} | {} | {} / {} | {} / {} | {} | {} |",
+            of.len(),
+            solved.len(),
+            pct(solved.len(), of.len()),
+            opt(median(&time), 0),
+            opt(time.iter().copied().reduce(f64::max), 0),
+            opt_int(median(&iterations)),
+            opt_int(iterations.iter().copied().reduce(f64::max)),
+            opt(median(&raw), 1),
+            opt(median(&short), 1),
+        );
+    };
+    for f in families {
+        let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
+        if !of.is_empty() {
+            oracle_row(f.name, &of);
+        }
+    }
+    oracle_row("all", &all);
+    let uncertified: Vec<&str> = results
+        .iter()
+        .filter(|r| !certified(r))
+        .map(|r| r.case.name.as_str())
+        .collect();
+    if !uncertified.is_empty() {
+        let _ = writeln!(s, "\nNot certified: {}.", uncertified.join(", "));
+    }
+    let solved_anyway: Vec<String> = results
+        .iter()
+        .filter(|r| !certified(r))
+        .filter_map(|r| {
+            let by: Vec<&str> = r
+                .runs
+                .iter()
+                .filter(|v| {
+                    v.metrics
+                        .as_ref()
+                        .is_ok_and(|m| m.outcome == Outcome::Reached)
+                })
+                .map(|v| v.variant.name)
+                .collect();
+            (!by.is_empty()).then(|| format!("{} ({})", r.case.name, by.join(", ")))
+        })
+        .collect();
+    if !solved_anyway.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nNot certified but reached by the planner (so solvable: the oracle's budget was too small): {}.",
+            solved_anyway.join(", ")
+        );
+    }
+
+    // Shipped scenarios.
+    if !shipped.is_empty() {
+        s.push_str(
+            "\n## The shipped scenarios\n\n\
+             `host-sim/scenarios/`, as shipped, each with every variant's settings added.\n\n\
+             | scenario | variant | outcome | steps | motion time (sum of h) | same path at the rate limits | straight joint-space line at the rate limits | time step |\n\
+             |---|---|---|---|---|---|---|---|\n",
+        );
+        for r in shipped {
+            match &r.metrics {
+                Ok(m) => {
+                    let _ = writeln!(
+                        s,
+                        "| `{}` | {} | {} | {} | {:.1} s | {:.1} s | {:.1} s | {} s |",
+                        r.scenario,
+                        r.variant.name,
+                        capp_sim::output::outcome_name(m.outcome),
+                        grouped(m.steps as f64),
+                        m.motion_time,
+                        m.same_path_time,
+                        m.straight_time,
+                        r.time_step
+                    );
+                }
+                Err(e) => {
+                    let _ = writeln!(
+                        s,
+                        "| `{}` | {} | refused: {e} | | | | | |",
+                        r.scenario, r.variant.name
+                    );
+                }
+            }
+        }
+    }
+
+    // Safety findings.
+    let mut unsafe_runs = Vec::new();
+    for r in results {
+        for v in &r.runs {
+            if let Ok(m) = &v.metrics {
+                if m.violations() > 0 || m.contacts > 0 {
+                    unsafe_runs.push(format!(
+                        "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                        r.case.name,
+                        v.variant.name,
+                        capp_sim::output::outcome_name(m.outcome),
+                        m.collisions - m.collisions_between,
+                        m.collisions_between,
+                        m.contacts,
+                        m.closest.map_or("-".into(), |c| format!("{c:.2e}")),
+                        m.not_finite + m.joint_limit + m.rate_limit,
+                        m.other
+                    ));
+                }
+            }
+        }
+    }
+    s.push_str("\n## Runs the checker rejects\n\n");
+    if unsafe_runs.is_empty() {
+        s.push_str("None: no collision or contact (rows or between rows), NaN, joint- or rate-limit violation in any run.\n");
+    } else {
+        let _ = writeln!(
+            s,
+            "{} runs. *Collisions at rows*: recorded configurations with a point inside an inflated \
+             obstacle by more than rounding (`C - 1 <= -1e-4`); *between rows*: dense points on the \
+             straight joint-space segment between two recorded configurations, both clear, that are \
+             inside (the step jumped through an edge or a corner); *contacts*: configurations with \
+             `-1e-4 < C - 1 <= 0`, on the inflated surface within what the planner's `f32` arithmetic \
+             decides (`capp check`'s exact test rejects them too; the margins, 3 to 6 in for PIPS, \
+             are what keeps the arm off the real surface); *closest*: the smallest `C - 1` seen.\n",
+            unsafe_runs.len()
+        );
+        s.push_str("| case | variant | outcome | collisions at rows | collisions between rows | contacts within rounding | closest C - 1 | limit / NaN violations | other |\n|---|---|---|---|---|---|---|---|---|\n");
+        for line in unsafe_runs {
+            let _ = writeln!(s, "{line}");
+        }
+    }
+
+    // Dead ends of the default variant.
+    if let Some(default) = variants.first() {
+        const PER_FAMILY: usize = 12;
+        let missed = |r: &CaseResult| -> Option<RunMetrics> {
+            let m = r.runs.iter().find(|v| v.variant.name == default.name)?;
+            let m = m.metrics.as_ref().ok()?;
+            (m.outcome != Outcome::Reached).then(|| m.clone())
+        };
+        let total = results
+            .iter()
+            .filter(|r| certified(r) && missed(r).is_some())
+            .count();
+        let _ = writeln!(
+            s,
+            "\n## Dead ends: certified cases `{}` did not reach ({total})\n\n\
+             The oracle found a path, the planner did not: what the next issues are judged on. \
+             Final errors are exact (the checker's kinematics), *closest* is the smallest `C - 1` \
+             over the run (0: the inflated surface). At most {PER_FAMILY} per family here; \
+             `target/suite/results.csv` has every run and `target/suite/cases/` every file.\n\n\
+             | case | what | outcome | steps | position error: start -> end | final orientation error | closest C - 1 |\n|---|---|---|---|---|---|---|",
+            default.name,
+        );
+        for f in families {
+            let of: Vec<(&CaseResult, RunMetrics)> = results
+                .iter()
+                .filter(|r| r.case.family == f.name && certified(r))
+                .filter_map(|r| missed(r).map(|m| (r, m)))
+                .collect();
+            for (r, m) in of.iter().take(PER_FAMILY) {
+                let unit = if r.case.family.starts_with("pips") {
+                    "in"
+                } else {
+                    "m"
+                };
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {:.3} -> {:.3} {unit} | {} | {} |",
+                    r.case.name,
+                    r.case.tags,
+                    capp_sim::output::outcome_name(m.outcome),
+                    grouped(m.steps as f64),
+                    m.initial_position_error,
+                    m.final_position_error,
+                    opt(m.final_orientation_error, 3),
+                    m.closest.map_or("-".into(), |c| format!("{c:.2e}")),
+                );
+            }
+            if of.len() > PER_FAMILY {
+                let _ = writeln!(
+                    s,
+                    "| ... | {} more in `{}` | | | | | |",
+                    of.len() - PER_FAMILY,
+                    f.name
+                );
+            }
+        }
+    }
+
+    s.push_str(
+        "\n## For context: what the field reports (their figures, not ours)\n\n\
+         From `shared/docs/planning.md`; different robots, scenes and budgets, so not comparable \
+         number for number. NEO (Haviland & Corke, RA-L 2021), a reactive QP controller on a \
+         7-DoF arm: 74.2 % of 198 problems in 5 scenes; on the same set RRT-Connect 85.4 % \
+         (615 ms), TrajOpt 81.8 %, CHOMP 65.2 %. cuRobo: 99.7-100 % of 2 600 MotionBenchMaker + \
+         MpiNets problems. A purely reactive controller near 74 % of cluttered problems is where \
+         the field stands; global planners reach 85-100 %.\n",
+    );
+    s
+}
+
+/// The per-case, per-variant CSV.
+pub fn csv(results: &[CaseResult]) -> String {
+    let mut s = String::from(
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+    );
+    let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
+    for r in results {
+        let (solved, ms, it, nodes, raw, path) = match &r.oracle {
+            Some(x) => (
+                x.solved.to_string(),
+                format!("{:.1}", x.wall_ms),
+                x.iterations.to_string(),
+                x.nodes.to_string(),
+                o(x.raw_time),
+                o(x.path_time),
+            ),
+            None => Default::default(),
+        };
+        for v in &r.runs {
+            let lead = format!(
+                "{},{},\"{}\",{}",
+                r.case.family, r.case.name, r.case.tags, v.variant.name
+            );
+            let tail = format!("{solved},{ms},{it},{nodes},{raw},{path}");
+            match &v.metrics {
+                Ok(m) => {
+                    let _ = writeln!(
+                        s,
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{tail},",
+                        capp_sim::output::outcome_name(m.outcome),
+                        m.reaches,
+                        m.steps,
+                        m.motion_time,
+                        m.same_path_time,
+                        m.straight_time,
+                        m.steps_10x.map_or(String::new(), |x| x.to_string()),
+                        m.final_position_error,
+                        o(m.final_orientation_error),
+                        o(m.closest),
+                        m.collisions,
+                        m.collisions_between,
+                        m.contacts,
+                        m.not_finite,
+                        m.joint_limit,
+                        m.rate_limit,
+                        m.other,
+                        m.wall_ms,
+                    );
+                }
+                Err(e) => {
+                    let _ = writeln!(
+                        s,
+                        "{lead},,,,,,,,,,,,,,,,,,{tail},\"{}\"",
+                        e.replace('"', "'")
+                    );
+                }
+            }
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_rank() {
+        let v = [5.0, 1.0, 4.0, 2.0, 3.0];
+        assert_eq!(median(&v), Some(3.0));
+        assert_eq!(percentile(&v, 0.9), Some(5.0));
+        assert_eq!(percentile(&v, 0.2), Some(1.0));
+        assert_eq!(median(&[]), None);
+        assert_eq!(grouped(13901.0), "13 901");
+        assert_eq!(grouped(999.0), "999");
+        assert_eq!(grouped(1234567.0), "1 234 567");
+    }
+}

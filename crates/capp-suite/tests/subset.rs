@@ -1,0 +1,311 @@
+//! A fixed subset of the suite, run by `cargo test`: what must never happen.
+//!
+//! Reach rates and step counts belong in the report (`cargo xtask suite`),
+//! not here: these tests assert only rules that hold for every case, on a
+//! fixed seed and a few cases of every family, with a lowered step cap so
+//! the debug build stays fast. No test measures time.
+
+use capp_core::Outcome;
+use capp_sim::check::Geometry;
+use capp_suite::case::{self, Case};
+use capp_suite::families::scene::{end_pose, within_limits, CLEAR_MARGIN};
+use capp_suite::families::{self, Family};
+use capp_suite::metrics::{self, DENSE_STEP};
+use capp_suite::oracle::{self, Budget};
+use capp_suite::rng::Rng;
+use capp_suite::runner;
+use capp_suite::variants::{variants, with_settings};
+
+const SEED: u64 = 20_240_611;
+/// Cases per family in the subset (20 in all).
+const PER_FAMILY: usize = 5;
+/// Step cap of the subset's runs.
+const CAP: u32 = 2500;
+
+fn subset() -> Vec<Case> {
+    families::families()
+        .iter()
+        .flat_map(|f| families::cases(f, SEED, PER_FAMILY).unwrap())
+        .collect()
+}
+
+fn family(name: &str) -> Family {
+    families::families()
+        .into_iter()
+        .find(|f| f.name == name)
+        .unwrap()
+}
+
+#[test]
+fn starts_and_goals_are_clear_within_limits_and_the_target_is_the_goal_pose() {
+    let cases = subset();
+    assert_eq!(cases.len(), 4 * PER_FAMILY);
+    for c in &cases {
+        let problem = case::parse(&c.text, &c.name).unwrap();
+        problem
+            .validate()
+            .unwrap_or_else(|e| panic!("{}: {e}", c.name));
+        let start: Vec<f64> = problem.start.iter().map(|&x| x as f64).collect();
+        assert_eq!(start, c.start, "{}: the file's start is the case's", c.name);
+        let geometry = Geometry::new(&problem);
+        for (what, q) in [("start", &c.start), ("goal", &c.goal)] {
+            assert!(
+                within_limits(&problem, q),
+                "{} {what} outside limits",
+                c.name
+            );
+            if let Some(closest) = geometry.clearance(q) {
+                assert!(
+                    closest.value >= CLEAR_MARGIN,
+                    "{} {what}: C - 1 = {}",
+                    c.name,
+                    closest.value
+                );
+            }
+        }
+        let (p, r) = end_pose(&problem, &c.goal);
+        let target = problem.waypoints.last().unwrap();
+        for (&t, &x) in target.position.iter().zip(&p) {
+            assert!((t as f64 - x).abs() <= 1e-5 * (1.0 + x.abs()), "{}", c.name);
+        }
+        if let Some(rows) = target.orientation {
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!((rows[i][j] as f64 - r[i][j]).abs() <= 1e-6, "{}", c.name);
+                }
+            }
+        }
+        assert!(
+            c.text.contains("# goal = ["),
+            "{}: goal written in the file",
+            c.name
+        );
+    }
+}
+
+#[test]
+fn the_same_seed_gives_the_same_cases_and_another_seed_others() {
+    for f in families::families() {
+        let a = families::cases(&f, SEED, 3).unwrap();
+        let b = families::cases(&f, SEED, 3).unwrap();
+        let c = families::cases(&f, SEED + 1, 3).unwrap();
+        for i in 0..3 {
+            assert_eq!(a[i].text, b[i].text, "{} {i}", f.name);
+            assert_ne!(a[i].text, c[i].text, "{} {i}", f.name);
+        }
+        // A case does not depend on how many others are generated.
+        assert_eq!(families::case(&f, SEED, 2).unwrap().text, a[2].text);
+    }
+}
+
+#[test]
+fn every_variant_is_a_valid_settings_block() {
+    let c = families::case(&family("pips_free"), SEED, 0).unwrap();
+    let base = case::parse(&c.text, &c.name).unwrap().settings;
+    for v in variants() {
+        let s = case::parse(&with_settings(&c.text, v.settings), &c.name)
+            .unwrap_or_else(|e| panic!("{}: {e}", v.name))
+            .settings;
+        assert_eq!(s == base, v.settings.is_empty(), "{}", v.name);
+    }
+}
+
+#[test]
+fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
+    let cap = format!("max_steps = {CAP}");
+    for c in subset() {
+        let v = variants()[0];
+        let text = with_settings(&with_settings(&c.text, v.settings), &cap);
+        let (problem, result) = runner::plan_text(&text, &c.name).unwrap();
+        let m = metrics::measure(&problem, &result);
+        let what = format!(
+            "{} ({}): {:?} after {} steps",
+            c.name, c.tags, m.outcome, m.steps
+        );
+        eprintln!("{what} dense {} closest {:?}", m.dense_checks, m.closest);
+        assert!(m.steps <= CAP, "{what}");
+        assert!(
+            m.outcome == Outcome::Reached || m.steps >= problem.settings.stall_window.min(CAP),
+            "{what}"
+        );
+        assert_eq!(
+            m.collisions, 0,
+            "{what}: collisions ({} between rows), closest {:?}",
+            m.collisions_between, m.closest
+        );
+        assert_eq!(m.not_finite, 0, "{what}");
+        assert_eq!(m.joint_limit, 0, "{what}");
+        assert_eq!(m.rate_limit, 0, "{what}");
+        assert_eq!(m.other, 0, "{what}");
+        assert!(
+            result
+                .rows
+                .iter()
+                .all(|r| r.q.iter().all(|x| x.is_finite())),
+            "{what}"
+        );
+        if m.outcome == Outcome::Reached {
+            assert!(
+                m.reaches,
+                "{what}: the checker's exact pose is within tolerance"
+            );
+            assert!(m.steps_10x.is_some_and(|s| s <= m.steps));
+        }
+        assert!(
+            m.same_path_time <= m.motion_time * (1.0 + 1e-4) + 1e-9,
+            "{what}"
+        );
+        assert!(
+            m.straight_time <= m.same_path_time * (1.0 + 1e-9) + 1e-9,
+            "{what}"
+        );
+    }
+}
+
+/// An independent re-check of a path, finer than the oracle's own.
+fn path_is_free(problem: &capp_sim::Problem, path: &[Vec<f64>]) -> bool {
+    let geometry = Geometry::new(problem);
+    let clear = |q: &[f64]| {
+        within_limits(problem, q) && geometry.clearance(q).is_none_or(|c| c.value > 0.0)
+    };
+    path.iter().all(|q| clear(q))
+        && path.windows(2).all(|w| {
+            let d = w[0]
+                .iter()
+                .zip(&w[1])
+                .map(|(a, b)| (b - a).abs())
+                .fold(0.0, f64::max);
+            let n = (2.0 * d / DENSE_STEP).ceil().max(1.0) as usize;
+            (1..n).all(|i| {
+                let t = i as f64 / n as f64;
+                let q: Vec<f64> = w[0]
+                    .iter()
+                    .zip(&w[1])
+                    .map(|(a, b)| a + t * (b - a))
+                    .collect();
+                clear(&q)
+            })
+        })
+}
+
+#[test]
+fn rrt_paths_join_start_and_goal_and_are_free() {
+    let budget = Budget {
+        iterations: 2000,
+        nodes: 10_000,
+        shortcuts: 50,
+    };
+    let mut solved = 0;
+    for (name, i) in [
+        ("planar_posts", 0),
+        ("planar_posts", 1),
+        ("iiwa_shelves", 1),
+        ("pips_free", 0),
+    ] {
+        let c = families::case(&family(name), SEED, i).unwrap();
+        let problem = case::parse(&c.text, &c.name).unwrap();
+        let mut rng = Rng::new(3);
+        let r = oracle::rrt_connect(&problem, &c.start, &c.goal, budget, &mut rng);
+        if !r.solved {
+            continue;
+        }
+        solved += 1;
+        assert_eq!(r.path.first(), Some(&c.start), "{}", c.name);
+        assert_eq!(r.path.last(), Some(&c.goal), "{}", c.name);
+        assert!(path_is_free(&problem, &r.path), "{}", c.name);
+        let time = r.path_time.unwrap();
+        assert!(
+            time <= r.raw_time.unwrap() + 1e-9 && time > 0.0,
+            "{}",
+            c.name
+        );
+        let rates = metrics::rates(&problem);
+        assert!(
+            time + 1e-9 >= metrics::rate_time(&rates, &c.start, &c.goal),
+            "{}",
+            c.name
+        );
+        // The same seed finds the same path.
+        let again = oracle::rrt_connect(&problem, &c.start, &c.goal, budget, &mut Rng::new(3));
+        assert_eq!(again.path, r.path, "{}", c.name);
+    }
+    assert!(solved >= 3, "the oracle solved {solved} of 4 easy cases");
+}
+
+#[test]
+fn a_step_through_an_obstacle_counts_as_a_collision() {
+    // Two clear configurations of the planar arm on either side of a post:
+    // the rows are clear, the segment between them is not.
+    let text = "start = [0.0]\n[units]\nangle = \"radians\"\nlength = \"metres\"\n\
+        [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 1.0\nmin = -3.0\nmax = 3.0\nmax_rate = 100.0\n\
+        [target]\nposition = [0.0, 1.0, 0.0]\n\
+        [[obstacles]]\ncentre = [0.7071, 0.7071, 0.0]\nsemi_axes = [0.05, 0.05, 0.5]\nexponents = [2.0, 2.0, 8.0]\n";
+    let problem = case::parse(text, "jump").unwrap();
+    let geometry = Geometry::new(&problem);
+    let (a, b) = (vec![0.0], vec![std::f64::consts::FRAC_PI_2]);
+    assert!(geometry.is_clear(&a, 0.0) && geometry.is_clear(&b, 0.0));
+    let mut inside = 0;
+    metrics::between(&a, &b, |q| {
+        inside += !geometry.is_clear(q, 0.0) as usize;
+        true
+    });
+    assert!(inside > 0);
+    // And an oracle edge across it is refused.
+    let mut space = oracle::Space::new(&problem);
+    assert!(!space.segment_free(&a, &b));
+    assert!(space.segment_free(&a, &[0.3]));
+}
+
+/// A known defect the suite found (PLANNING.md, "Runs the checker rejects"):
+/// the planner accepts a step by its end configuration alone, and at the
+/// iiwa's rates (up to 3.1 rad/s, 0.16 rad in a 0.05 s step) a step can cut
+/// through an obstacle's edge between two clear rows. Fails today; run with
+/// `cargo test -p capp-suite -- --ignored`.
+#[test]
+#[ignore = "known defect: steps are accepted by their end point; at the iiwa's rates one cuts a shelf's edge (iiwa_shelves-002, seed 1)"]
+fn known_defect_no_step_jumps_through_an_obstacle_at_iiwa_rates() {
+    let c = families::case(&family("iiwa_shelves"), 1, 2).unwrap();
+    let m = runner::measure_variant(&c.text, &c.name, variants()[0])
+        .metrics
+        .unwrap();
+    assert_eq!(m.collisions_between, 0, "closest C - 1 {:?}", m.closest);
+}
+
+#[test]
+fn report_tables_are_well_formed() {
+    use capp_suite::report::{self, RunInfo};
+    let f = family("planar_posts");
+    let budget = Budget {
+        iterations: 300,
+        nodes: 2000,
+        shortcuts: 10,
+    };
+    let results: Vec<_> = families::cases(&f, SEED, 3)
+        .unwrap()
+        .iter()
+        .map(|c| runner::run_case(c, &variants(), SEED, Some(budget)))
+        .collect();
+    let info = RunInfo {
+        seed: SEED,
+        counts: vec![(f.name.to_string(), 3)],
+        threads: 1,
+        machine: "test".into(),
+        wall_s: 0.0,
+        budget,
+        command: "test".into(),
+    };
+    let text = report::markdown(&info, &[f], &variants(), &results, &[]);
+    let mut tables = 0;
+    let mut columns: Option<usize> = None;
+    for line in text.lines() {
+        if line.starts_with('|') {
+            let n = line.matches('|').count();
+            assert_eq!(*columns.get_or_insert(n), n, "{line}");
+        } else {
+            tables += columns.take().is_some() as usize;
+        }
+    }
+    assert!(tables >= 4, "{text}");
+    let csv = report::csv(&results);
+    assert_eq!(csv.lines().count(), 1 + 3 * variants().len());
+}
