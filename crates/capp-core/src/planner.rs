@@ -27,7 +27,7 @@
 //! halving. Nothing allocates; the planner is a fixed-size value.
 
 use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
-use crate::control::damped::{damped_rate, DampedWorkspace};
+use crate::control::damped::{damped_rate, DampedWorkspace, Guard};
 use crate::control::{
     descent_rate, lyapunov_terms, pose_error, weighted_rate, Drive, LawKind, PoseError, Target,
 };
@@ -38,6 +38,12 @@ use crate::projection::{limit_rates, project, retreat, strength};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
 use crate::step_size::{self, advancement};
+
+/// Fraction of `engage_clearance` (in `C - 1`) below which a step may not
+/// bring the closest pair closer: the arm stops short of resting on an
+/// inflated surface (where `f32` rounding decides contact) instead of
+/// creeping onto it in ever smaller steps.
+pub const CONTACT_FLOOR: f32 = 0.01;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -471,17 +477,20 @@ impl<const N: usize> Planner<N> {
         let (drive, constrained, mut h) = match settings.law.kind {
             LawKind::Gradient | LawKind::Paper => self.first_order(robot, &settings, engage),
             LawKind::DampedLeastSquares => {
+                let guard = Guard {
+                    gradient: &self.now.mu[..n],
+                    strength: engage,
+                    retreat: retreat(
+                        self.now.field.clearance.map(|c| c.value),
+                        settings.avoidance.engage_clearance,
+                    ),
+                };
                 let step = damped_rate(
                     robot,
                     &self.now.frames,
                     &self.q[..n],
                     &self.now.error,
-                    &self.now.mu[..n],
-                    engage,
-                    retreat(
-                        self.now.field.clearance.map(|c| c.value),
-                        settings.avoidance.engage_clearance,
-                    ),
+                    &guard,
                     &settings.law,
                     settings.time_step_s,
                     &mut self.damped,
@@ -529,7 +538,13 @@ impl<const N: usize> Planner<N> {
                     self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
                 }
                 self.next.evaluate(scenario, &self.q_next[..n], &target);
-                let safe = self.next.field.clear;
+                // Clear, and not creeping onto a surface: below the contact
+                // floor the closest clearance may not shrink further.
+                let closest =
+                    |e: &Evaluation<N>| e.field.clearance.map_or(f32::INFINITY, |c| c.value);
+                let (c_next, c_now) = (closest(&self.next), closest(&self.now));
+                let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
+                let safe = self.next.field.clear && (c_next >= floor || c_next >= c_now);
                 let descends = constrained || self.next.error.v <= self.now.error.v;
                 if safe && descends && all_finite(&self.q_next[..n]) {
                     accepted = true;

@@ -14,29 +14,33 @@
 //!
 //! ## Conservative advancement
 //!
-//! The step moves the joints along the straight segment `q(s) = q + s h qdot`,
-//! `s` in `[0, 1]` (what a joint controller interpolating between setpoints
-//! does). A point `p` on link `k` then travels at most
+//! The step moves the joints along the straight segment `q(s) = q + s dq`,
+//! `s` in `[0, 1]`, `dq = h qdot` (what a joint controller interpolating
+//! between setpoints does). A point `p` on link `k` then travels at most
 //!
 //! ```text
-//! |J_p h qdot| + R_k Phi_r^2 + Phi_r Phi_p
+//! s |J_p dq| + s^2 Q_k,   Q_k = 1/2 sum_m |dq_m| (2 Phi_<m + |dq_m|) L_mk  +  sum_prismatic j |dq_j| Phi_<j
 //! ```
 //!
-//! where `Phi_r` and `Phi_p` sum `|h qdot_j|` over the revolute and prismatic
-//! joints up to `k`, and `R_k` is the chain length to the end of link `k`
-//! ([`crate::Robot::reach`] is the last one). Why: the path length is at most
-//! `|p'(0)| + sup |p''| / 2`, and `p'' = sum_ij dq_i dq_j d2p/dq_i dq_j` with
-//! `|d2p/dq_i dq_j| <= 2 R_k` for two revolute joints (a rotation of the
-//! lever `z_j x (p - o_j)` by joint `i`), `<= 1` (`z_i x z_j`) for a revolute
-//! and a prismatic one, and 0 for two prismatic ones. `J_p h qdot` is linear in
-//! `p` along a link (`v(x) = w x x + b`), so a link's worst point is one of its
-//! ends. Each link's distance is the lower bound of
-//! [`crate::obstacle::Contact::distance_sq`] (it holds for every convex `C`),
-//! or the influence distance for a link no obstacle is near.
+//! the first sum over the revolute joints `m <= k`, with `Phi_<m` the sum of
+//! `|dq_i|` over the revolute joints before `m` and `L_mk` the chain length
+//! from joint `m`'s pivot to the end of link `k` (prismatic links at their
+//! longest: a bound on `|p - o_m|` in every configuration). Why: the path
+//! length is at most `|p'(0)| + sup |p''| / 2`, and
+//! `p'' = sum_ij dq_i dq_j d2p/dq_i dq_j` with `d2p/dq_i dq_j = z_i x (z_m x
+//! (p - o_m))`, `m = max(i, j)` (Jacobi's identity), for two revolute joints;
+//! `z_i x z_j` for a revolute `i` before a prismatic `j`; 0 otherwise. Grouped
+//! by `m`, the revolute terms are `dq_m (2 w_<m + dq_m z_m) x (z_m x (p -
+//! o_m))`. `J_p dq` is linear in `p` along a link (`v(x) = w x x + b`), so a
+//! link's worst point is one of its ends. The largest `s` with travel at most
+//! `fraction` times the link's distance `D` solves the quadratic:
+//! `s = 2 D / (A + sqrt(A^2 + 4 Q D))`. Each link's distance is the lower
+//! bound of [`crate::obstacle::Contact::distance_sq`] (it holds for every
+//! convex `C`), or the influence distance for a link no obstacle is near.
 
 use crate::control::PoseError;
 use crate::kinematics::Frames;
-use crate::math::{max, min, Vec3};
+use crate::math::{max, Vec3};
 use crate::mission::Settings;
 use crate::robot::{JointKind, Robot};
 
@@ -109,7 +113,10 @@ pub fn advancement<const N: usize>(
     // The velocity field of the links so far: v(x) = w x x + b, per unit s.
     let mut w = Vec3::zeros();
     let mut b = Vec3::zeros();
-    let (mut phi_r, mut phi_p) = (0.0f32, 0.0f32);
+    // Phi_<m, and the sums giving Q_k: sum a_m, sum a_m L_0m, the prismatic sum.
+    let mut phi = 0.0f32;
+    let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
+    let mut pivot_chain = 0.0f32;
     let mut start_speed_sq = 0.0f32;
     let mut scale = 1.0f32;
     let fraction_sq = fraction * fraction;
@@ -121,33 +128,39 @@ pub fn advancement<const N: usize>(
         .enumerate()
     {
         let step = r * h;
+        let size = step.abs();
         let z = frames.axis(j);
         match joint.kind {
             JointKind::Revolute => {
                 w += z * step;
                 b -= z.cross(&frames.pivot(j)) * step;
-                phi_r += step.abs();
+                let a = size * (2.0 * phi + size);
+                lever_sum += a;
+                lever_base += a * pivot_chain;
+                phi += size;
             }
             JointKind::Prismatic => {
                 b += z * step;
-                phi_p += step.abs();
+                sliding += size * phi;
             }
         }
+        pivot_chain = link.chain;
         let v = w.cross(&frames.origin(j)) + b;
         let end_speed_sq = v.dot(&v);
         let first_sq = max(start_speed_sq, end_speed_sq);
-        let second = link.chain * phi_r * phi_r + phi_r * phi_p;
         start_speed_sq = end_speed_sq;
+        let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let allowed_sq = fraction_sq * d_sq;
         if 2.0 * (first_sq + second * second) <= allowed_sq {
             continue;
         }
-        // travel(s h) <= s travel(h) for s <= 1: first-order terms scale with
-        // s, second-order ones with s^2.
-        let travel = libm::sqrtf(first_sq) + second;
+        let first = libm::sqrtf(first_sq);
         let allowed = libm::sqrtf(allowed_sq);
-        if travel > allowed {
-            scale = min(scale, allowed / travel);
+        // s first + s^2 second = allowed.
+        let root = libm::sqrtf(first * first + 4.0 * second * allowed);
+        let s = 2.0 * allowed / (first + root);
+        if s < scale {
+            scale = s;
         }
     }
     if scale.is_finite() {

@@ -23,9 +23,14 @@ pub struct Variant {
 pub fn variants() -> Vec<Variant> {
     vec![
         Variant {
-            name: "gradient",
-            description: "the defaults: gradient law, projection engaged near contact (C - 1 < 1)",
+            name: "damped",
+            description: "the defaults: damped least squares (`LawKind::DampedLeastSquares`), projection engaged near contact (C - 1 < 1)",
             settings: "",
+        },
+        Variant {
+            name: "gradient",
+            description: "the first-order gradient law (`LawKind::Gradient`, the default before issue 12), otherwise the defaults",
+            settings: "law = \"gradient\"",
         },
         Variant {
             name: "paper",
@@ -34,8 +39,7 @@ pub fn variants() -> Vec<Variant> {
         },
         Variant {
             name: "always-on",
-            description:
-                "gradient law with the paper's always-on projection (`engage_clearance = 0`)",
+            description: "the default law with the paper's always-on projection (`engage_clearance = 0`)",
             settings: "engage_clearance = 0.0",
         },
     ]

@@ -74,7 +74,7 @@
 use crate::control::{joint_weight, Drive, LawSettings, PoseError};
 use crate::kinematics::Frames;
 use crate::linalg::{factor, solve, Sym6, Vec6};
-use crate::math::{max, min, norm, Vec3};
+use crate::math::{dot_slice, max, min, norm, Vec3};
 use crate::robot::{JointKind, Robot};
 
 /// Buffers of the damped least-squares law, sized once for `N` joints.
@@ -86,6 +86,8 @@ pub struct DampedWorkspace<const N: usize> {
     metric: [f32; N],
     /// `G = -dV/dq` (eq. 13).
     gradient: [f32; N],
+    /// `K g` of the guard's gradient.
+    kg: [f32; N],
     /// `L D L^T` factor of `J M J^T + mu Lambda^-1`.
     factor: Sym6,
 }
@@ -96,6 +98,7 @@ impl<const N: usize> Default for DampedWorkspace<N> {
             columns: [[0.0; 6]; N],
             metric: [0.0; N],
             gradient: [0.0; N],
+            kg: [0.0; N],
             factor: [[0.0; 6]; 6],
         }
     }
@@ -110,6 +113,77 @@ pub struct DampedStep {
     pub constrained: bool,
     /// `T`: seconds the undamped-by-speed step needs at the rate limits.
     pub time_at_limits_s: f32,
+}
+
+/// A one-sided limit on the step's approach to obstacles: after projection
+/// `gradient . dq <= (1 - strength) max(gradient . dq*, 0) - retreat`.
+#[derive(Clone, Copy, Debug)]
+pub struct Guard<'a> {
+    /// The gradient of a potential that grows as the arm approaches
+    /// (`n` values): eq. 20's `mu = dP/dq`.
+    pub gradient: &'a [f32],
+    /// How much of the approach to remove, in `[0, 1]` ([`crate::projection::strength`]).
+    pub strength: f32,
+    /// How far to move away, in the potential's units ([`crate::projection::retreat`]).
+    pub retreat: f32,
+}
+
+/// `K g = M g - M J^T (J M J^T + mu Lambda^-1)^-1 J M g` into `out`; returns
+/// `g . K g`.
+fn metric_of<const N: usize>(
+    g: &[f32],
+    columns: &[Vec6; N],
+    metric: &[f32; N],
+    factor: &Sym6,
+    out: &mut [f32; N],
+) -> f32 {
+    let mut t = [0.0f32; 6];
+    for ((column, &m), &gj) in columns.iter().zip(metric).zip(g) {
+        let u = m * gj;
+        for (ti, ci) in t.iter_mut().zip(column) {
+            *ti += u * ci;
+        }
+    }
+    solve(factor, &mut t);
+    let mut along = 0.0f32;
+    for (((o, column), &m), &gj) in out.iter_mut().zip(columns).zip(metric).zip(g) {
+        *o = m * gj - m * dot6(column, &t);
+        along += gj * *o;
+    }
+    along
+}
+
+/// Projects `rate` (the step `dq*`) against `guard` in the metric `K`: the
+/// least change in `K^-1` that brings `g . dq` down to what the guard allows.
+/// Returns whether it changed the step.
+fn project_guard<const N: usize>(
+    guard: &Guard<'_>,
+    ws: &mut DampedWorkspace<N>,
+    rate: &mut [f32],
+) -> bool {
+    if !(guard.strength > 0.0) {
+        return false;
+    }
+    let approach = dot_slice(guard.gradient, rate);
+    let allowed = (1.0 - min(guard.strength, 1.0)) * max(approach, 0.0) - max(guard.retreat, 0.0);
+    if !(approach > allowed && approach.is_finite() && allowed.is_finite()) {
+        return false;
+    }
+    let along = metric_of(
+        guard.gradient,
+        &ws.columns,
+        &ws.metric,
+        &ws.factor,
+        &mut ws.kg,
+    );
+    if !(along > 0.0 && along.is_finite()) {
+        return false;
+    }
+    let k = (approach - allowed) / along;
+    for (r, kg) in rate.iter_mut().zip(&ws.kg) {
+        *r -= k * kg;
+    }
+    true
 }
 
 /// `[a; b]` as a task-space 6-vector.
@@ -169,8 +243,7 @@ pub fn rotation_error<const N: usize>(frames: &Frames<N>, error: &PoseError) -> 
 }
 
 /// The damped least-squares step (module docs) for the arm in `frames` at `q`
-/// with pose `error`, obstacle gradient `mu_p` (eq. 20), projection
-/// `strength` and `retreat` ([`crate::projection::retreat`]); writes the joint rate (per second) into `rate` for a step of
+/// with pose `error` and the obstacle `guard`; writes the joint rate (per second) into `rate` for a step of
 /// `time_step_s`. All slices hold `robot.len()` values.
 #[allow(clippy::too_many_arguments)]
 pub fn damped_rate<const N: usize>(
@@ -178,9 +251,7 @@ pub fn damped_rate<const N: usize>(
     frames: &Frames<N>,
     q: &[f32],
     error: &PoseError,
-    mu_p: &[f32],
-    strength: f32,
-    retreat: f32,
+    guard: &Guard<'_>,
     law: &LawSettings,
     time_step_s: f32,
     ws: &mut DampedWorkspace<N>,
@@ -286,37 +357,8 @@ pub fn damped_rate<const N: usize>(
         }
     }
 
-    // One-sided projection in the metric of the damped problem: at most
-    // (1 - strength) of the approach is left, and `retreat` is taken away.
-    let mut constrained = false;
-    let approach: f32 = mu_p.iter().zip(rate.iter()).map(|(m, r)| m * r).sum();
-    let allowed = (1.0 - min(strength, 1.0)) * max(approach, 0.0) - max(retreat, 0.0);
-    if strength > 0.0 && approach > allowed && approach.is_finite() && allowed.is_finite() {
-        // t = J M mu_P, solved in place; then K mu_P = M mu_P - M J^T t.
-        let mut t = [0.0f32; 6];
-        for ((column, &m), &g) in ws.columns.iter().zip(&ws.metric).zip(mu_p) {
-            let u = m * g;
-            for (ti, ci) in t.iter_mut().zip(column) {
-                *ti += u * ci;
-            }
-        }
-        solve(&ws.factor, &mut t);
-        let mut along = 0.0f32;
-        for ((column, &m), &g) in ws.columns.iter().zip(&ws.metric).zip(mu_p) {
-            along += g * (m * g - m * dot6(column, &t));
-        }
-        if along > 0.0 && along.is_finite() {
-            let k = (approach - allowed) / along;
-            for ((r, column), (&m, &g)) in rate
-                .iter_mut()
-                .zip(&ws.columns)
-                .zip(ws.metric.iter().zip(mu_p))
-            {
-                *r -= k * (m * g - m * dot6(column, &t));
-            }
-            constrained = true;
-        }
-    }
+    // One-sided projection in the metric of the damped problem.
+    let constrained = project_guard(guard, ws, rate);
 
     // Speed: the most loaded joint at its limit, or the whole step in one.
     let time_at_limits = robot
