@@ -14,7 +14,7 @@
 //! step costs beyond their sum is the state machine and copying.
 
 use capp_core::avoidance::{potential_gradient, ObstacleField};
-use capp_core::control::damped::{damped_rate, DampedWorkspace};
+use capp_core::control::damped::{damped_rate, DampedWorkspace, Guard};
 use capp_core::control::{
     descent_rate, lyapunov_terms, pose_error, weighted_rate, LawKind, PoseError, Target,
 };
@@ -109,17 +109,20 @@ impl<const N: usize> PhaseBench<N> {
                 self.field.clearance.map(|c| c.value),
                 settings.avoidance.engage_clearance,
             );
+            let guard = Guard {
+                gradient: &self.mu[..n],
+                strength: engage,
+                retreat: retreat(
+                    self.field.clearance.map(|c| c.value),
+                    settings.avoidance.engage_clearance,
+                ),
+            };
             return damped_rate(
                 robot,
                 &self.frames,
                 &self.q[..n],
                 &self.error,
-                &self.mu[..n],
-                engage,
-                retreat(
-                    self.field.clearance.map(|c| c.value),
-                    settings.avoidance.engage_clearance,
-                ),
+                &guard,
                 law,
                 settings.time_step_s,
                 &mut self.damped,

@@ -161,7 +161,7 @@ fn project_guard<const N: usize>(
     ws: &mut DampedWorkspace<N>,
     rate: &mut [f32],
 ) -> bool {
-    if !(guard.strength > 0.0) {
+    if guard.strength <= 0.0 || guard.strength.is_nan() {
         return false;
     }
     let approach = dot_slice(guard.gradient, rate);
