@@ -13,6 +13,8 @@ use embedded_hal_nb::{nb, serial};
 
 use super::*;
 
+mod line;
+
 /// A UART that takes at most `budget` bytes per `refill` (a slow line).
 struct FakeUart {
     rx: VecDeque<u8>,
@@ -68,6 +70,16 @@ fn replies(bytes: &[u8]) -> Vec<Reply> {
         .collect()
 }
 
+/// The frames in `bytes` that decode, skipping damaged ones.
+fn replies_lossy(bytes: &[u8]) -> Vec<Reply> {
+    let mut acc = Accumulator::<{ MAX_FRAME - 1 }>::new();
+    bytes
+        .iter()
+        .filter_map(|&b| acc.feed_message::<Reply>(b))
+        .filter_map(Result::ok)
+        .collect()
+}
+
 fn target() -> capp_core::Waypoint {
     let robot = pips::robot::<32>().unwrap();
     let mut q = pips::home();
@@ -98,13 +110,22 @@ fn host_plan() -> Vec<(Vec<f32>, f32)> {
     }
 }
 
+/// PIPS to [`target`], default settings: what [`host_plan`] plans.
+fn load_commands() -> Vec<Command> {
+    std::vec![
+        Command::Clear(Part::All),
+        Command::Preset(Preset::Pips),
+        Command::Waypoint {
+            index: 0,
+            waypoint: target().into(),
+        },
+    ]
+}
+
 fn load(uart: &mut FakeUart) {
-    uart.send(&Command::Clear(Part::All));
-    uart.send(&Command::Preset(Preset::Pips));
-    uart.send(&Command::Waypoint {
-        index: 0,
-        waypoint: target().into(),
-    });
+    for c in load_commands() {
+        uart.send(&c);
+    }
 }
 
 /// Runs a plan with `budget` bytes of UART per tick; returns all replies after `Run`'s ack.

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 02 00 01, CRC-32 0x8bc23dea (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 03 00 01, CRC-32 0x8a0057dd (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x02, 0x06, 0x01, 0xea, 0x3d, 0xc2, 0x8b, 0x00]
+        &[0x02, 0x03, 0x04, 0x01, 0xdd, 0x57, 0x02, 0x8a, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x02, 0x01, 0x08, 0x0f, 0xb4, 0x05, 0xeb, 0x00]
+        &[0x08, 0x03, 0x01, 0x08, 0x38, 0xde, 0xc7, 0xea, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x02, 0x02, 0xff, 0x01, 0xff, 0xd7, 0x86, 0x6a, 0x9c, 0x00]
+        &[0x0a, 0x03, 0x02, 0xff, 0x01, 0xff, 0x67, 0xaf, 0x0a, 0xa1, 0x00]
     );
 }
 
@@ -308,6 +308,10 @@ fn every_reply_is_pinned() {
         rx_errors: 2,
         overruns: 0,
         stack_peak: 128,
+        rx_overflows: 5,
+        step_cycles_min: 1,
+        step_cycles_mean: 300,
+        step_cycles_max: 20_000,
     };
     check(
         &Reply::Status(status),
@@ -319,6 +323,7 @@ fn every_reply_is_pinned() {
             &[0x01],
             &MINUS_ONE,
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
+            &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
         ]),
     );
     let idle = Status {
@@ -336,6 +341,7 @@ fn every_reply_is_pinned() {
             &TWO,
             &[0x00],
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
+            &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
         ]),
     );
     for (i, s) in [State::Idle, State::Running, State::Done, State::Stopped]
