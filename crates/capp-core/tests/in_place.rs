@@ -6,6 +6,8 @@ use capp_core::kinematics::{forward_kinematics, Frames};
 use capp_core::*;
 
 type Sc = Scenario<18, 4, 3>;
+/// Joints, obstacles, waypoints and settings, as `Scenario::init` takes them.
+type Load<'a> = (&'a [Joint], &'a [SuperEllipsoid], &'a [Waypoint], Settings);
 
 fn obstacles() -> [SuperEllipsoid; 2] {
     [
@@ -123,7 +125,7 @@ fn in_place_refuses_what_new_refuses_and_leaves_an_empty_value() {
     let far = Waypoint::at([1.0e9, 0.0, 0.0]);
     let ok = [target()];
     let four = [target(); 4];
-    let cases: [(&[Joint], &[SuperEllipsoid], &[Waypoint], Settings); 8] = [
+    let cases: [Load; 8] = [
         (&[], &[], &ok, Settings::default()),
         (&bad_joint, &[], &ok, Settings::default()),
         (&joints, &[], &four, Settings::default()),

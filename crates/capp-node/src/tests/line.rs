@@ -233,7 +233,7 @@ fn run(design: Design) -> Outcome {
                 } else if node.status().state == State::Running {
                     running = true;
                     host.nonce += 1;
-                    let c = if host.nonce % 2 == 0 {
+                    let c = if host.nonce.is_multiple_of(2) {
                         Command::Status
                     } else {
                         Command::Ping { nonce: host.nonce }
