@@ -294,9 +294,14 @@ impl<const N: usize> Planner<N> {
     ) -> Result<(), StartError> {
         let result = self.begin(scenario, start);
         if result.is_err() {
-            self.reset(&[]);
+            self.clear();
         }
         result
+    }
+
+    /// Makes this planner [`Planner::empty`], in place.
+    pub fn clear(&mut self) {
+        self.reset(&[]);
     }
 
     fn begin<const M: usize, const W: usize>(

@@ -108,10 +108,15 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             })
             .and_then(|()| self.fill(obstacles, waypoints, settings));
         if result.is_err() {
-            self.robot.clear();
-            let _ = self.fill(&[], &[], Settings::default());
+            self.clear();
         }
         result
+    }
+
+    /// Makes this scenario [`Scenario::empty`], in place.
+    pub fn clear(&mut self) {
+        self.robot.clear();
+        let _ = self.fill(&[], &[], Settings::default());
     }
 
     /// Rebuilds every field but the robot (validated by `Robot::new` /

@@ -197,3 +197,16 @@ fn in_place_refuses_what_new_refuses_and_leaves_an_empty_value() {
         assert_eq!(before.step, planner.last_report().step);
     }
 }
+
+#[test]
+fn clear_empties_in_place() {
+    let (mut scenario, mut planner) = used();
+    scenario.clear();
+    planner.clear();
+    assert!(scenario.robot().is_empty() && scenario.obstacles().is_empty());
+    assert!(scenario.waypoints().is_empty() && scenario.targets().is_empty());
+    assert_eq!(scenario.settings(), Sc::empty().settings());
+    assert!(planner.joints().is_empty() && planner.is_done());
+    assert_eq!(planner.last_report(), Planner::<18>::empty().last_report());
+    assert!(planner.restart(&scenario, &[]).is_err());
+}

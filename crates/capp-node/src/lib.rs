@@ -105,7 +105,43 @@ impl Draft {
             start: Vec::new(),
         }
     }
+
+    /// [`Draft::new`] in place.
+    fn clear(&mut self) {
+        let Draft {
+            joints,
+            obstacles,
+            waypoints,
+            settings,
+            start,
+        } = self;
+        joints.clear();
+        obstacles.clear();
+        waypoints.clear();
+        *settings = None;
+        start.clear();
+    }
 }
+
+/// The status of a board that has run nothing.
+const IDLE: Status = Status {
+    state: State::Idle,
+    outcome: None,
+    step: 0,
+    v: 0.0,
+    position_error: 0.0,
+    orientation_error: 0.0,
+    clearance: None,
+    setpoints: 0,
+    dropped: 0,
+    rx_errors: 0,
+    overruns: 0,
+    stack_peak: 0,
+    rx_overflows: 0,
+    step_cycles_min: 0,
+    step_cycles_mean: 0,
+    step_cycles_max: 0,
+};
 
 /// The plan: valid while `Status::state` is `Running` (and after, until the
 /// next `Run`), re-initialised in place by `Run`.
@@ -177,9 +213,9 @@ impl<const TXQ: usize> Default for Node<TXQ> {
 }
 
 impl<const TXQ: usize> Node<TXQ> {
-    /// A node with nothing loaded. A board builds it once, in place, in a
-    /// `static` (e.g. `static_cell::StaticCell::init_with(Node::new)`): it is
-    /// some 30 KiB, almost all of it containers with nothing in them.
+    /// A node with nothing loaded, by value (about 30 KiB: for a host). A
+    /// board keeps its node in a `static` and calls [`Node::reset`] on it
+    /// instead, so that it is never built on the stack.
     pub fn new() -> Self {
         Node {
             rx: capp_proto::Accumulator::new(),
@@ -192,24 +228,7 @@ impl<const TXQ: usize> Node<TXQ> {
                 streaming: false,
                 time_s: 0.0,
             },
-            status: Status {
-                state: State::Idle,
-                outcome: None,
-                step: 0,
-                v: 0.0,
-                position_error: 0.0,
-                orientation_error: 0.0,
-                clearance: None,
-                setpoints: 0,
-                dropped: 0,
-                rx_errors: 0,
-                overruns: 0,
-                stack_peak: 0,
-                rx_overflows: 0,
-                step_cycles_min: 0,
-                step_cycles_mean: 0,
-                step_cycles_max: 0,
-            },
+            status: IDLE,
             final_pending: false,
             stack_probe: None,
             cycle_counter: None,
@@ -221,6 +240,45 @@ impl<const TXQ: usize> Node<TXQ> {
             },
             line_errors_seen: 0,
         }
+    }
+
+    /// [`Node::new`] in place: every field back to its initial value, with
+    /// no node-sized (or scenario-sized) value on the stack.
+    pub fn reset(&mut self) {
+        // Every field is named: a field added to `Node` fails to compile here.
+        let Node {
+            rx,
+            tx,
+            draft,
+            plan,
+            status,
+            final_pending,
+            stack_probe,
+            cycle_counter,
+            cycles,
+            line_errors_seen,
+        } = self;
+        *rx = capp_proto::Accumulator::new();
+        tx.clear();
+        draft.clear();
+        let Active {
+            scenario,
+            planner,
+            decimator,
+            streaming,
+            time_s,
+        } = plan;
+        scenario.clear();
+        planner.clear();
+        *decimator = Decimator::new(SetpointFilter::Every(1));
+        *streaming = false;
+        *time_s = 0.0;
+        *status = IDLE;
+        *final_pending = false;
+        *stack_probe = None;
+        *cycle_counter = None;
+        *cycles = CycleStats::default();
+        *line_errors_seen = 0;
     }
 
     /// Sets the free-running cycle counter (wrapping `u32`, e.g. the DWT's

@@ -142,6 +142,11 @@ fn run_plan(budget: usize) -> (Vec<Reply>, Vec<(Vec<f32>, f32)>) {
 /// [`run_plan`] started by `run`.
 fn run_plan_with(budget: usize, run: Command) -> (Vec<Reply>, Vec<(Vec<f32>, f32)>) {
     let mut node = Node::<2048>::new();
+    (run_on(&mut node, budget, run), host_plan())
+}
+
+/// [`run_plan_with`] on `node`; the replies only.
+fn run_on(node: &mut Node<2048>, budget: usize, run: Command) -> Vec<Reply> {
     let mut uart = FakeUart::new(usize::MAX);
     load(&mut uart);
     uart.send(&run);
@@ -163,7 +168,41 @@ fn run_plan_with(budget: usize, run: Command) -> (Vec<Reply>, Vec<(Vec<f32>, f32
             break;
         }
     }
-    (replies(&uart.tx), host_plan())
+    replies(&uart.tx)
+}
+
+#[test]
+fn a_reset_node_is_a_new_node() {
+    let run = || Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    let fresh = run_on(&mut Node::new(), usize::MAX, run());
+    // A node in some other state: another plan stopped half way, a draft with
+    // obstacles and settings, a bad frame counted, replies still queued.
+    let mut node = Node::<2048>::new();
+    node.set_cycle_counter(|| 7);
+    let mut uart = FakeUart::new(usize::MAX);
+    load(&mut uart);
+    uart.send(&Command::Settings(capp_core::Settings::default().into()));
+    uart.send(&run());
+    node.poll(&mut uart);
+    for _ in 0..20 {
+        node.tick(1);
+    }
+    uart.send(&Command::Obstacle {
+        index: 0,
+        obstacle: capp_core::SuperEllipsoid::aligned([500.0; 3], [1.0; 3], 2.0).into(),
+    });
+    uart.rx.extend([1, 2, 3, 0]);
+    uart.budget = 0;
+    uart.left = 0;
+    node.poll(&mut uart);
+    assert!(node.tx_len() > 0 && node.status().rx_errors == 1);
+    node.reset();
+    assert_eq!(node.status(), Node::<2048>::new().status());
+    assert_eq!(node.tx_len(), 0);
+    assert_eq!(run_on(&mut node, usize::MAX, run()), fresh);
 }
 
 #[test]
