@@ -11,7 +11,7 @@
 //! ## Transmit policy (what happens when the UART cannot keep up)
 //!
 //! Frames wait in a bounded byte queue of `TXQ` bytes that [`Node::poll`]
-//! drains without blocking. `RESERVE = 2 * MAX_FRAME` bytes of it are kept for
+//! (or [`Node::poll_queue`]) drains without blocking. `RESERVE = 2 * MAX_FRAME` bytes of it are kept for
 //! replies:
 //!
 //! * **Setpoints** are queued only if they fit with the reserve left free;
@@ -19,8 +19,11 @@
 //!   the same (the host sees the gap) and `Status::dropped` counts it. The
 //!   planner never waits for the UART: the control loop keeps its rate.
 //! * **Replies** (acks, errors, pongs, statuses) are never dropped: a byte is
-//!   read from the UART only while the reserve is free, so a command's reply
-//!   always fits; a host that floods the board is slowed down, not ignored.
+//!   taken from the UART (or the receive queue) only while the reserve is
+//!   free, so a command's reply always fits; a host that floods the board is
+//!   slowed down, not ignored (with receive by interrupt, bytes that no
+//!   longer fit the receive queue are dropped and counted, `Status::rx_overflows`,
+//!   and their frame is answered with an error).
 //! * The **final status** of a plan waits, if the queue is full, until it fits.
 //!
 //! ## Receive
@@ -42,9 +45,10 @@
 //! ## Memory
 //!
 //! A node is about 30 KiB (the model for 32 joints and 64 obstacles, the
-//! workspace, the draft load, the transmit queue). A board builds it once in
-//! a `static` and never moves it: `Run` re-initialises the scenario and the
-//! planner in place (`Scenario::init`, `Planner::restart`), so no
+//! workspace, the draft load, the transmit queue). A board keeps it in a
+//! `static` (zeroed storage in `.bss`, made a node in place by
+//! [`Node::reset`]) and never moves it: `Run` re-initialises the scenario and
+//! the planner in place (`Scenario::init`, `Planner::restart`), so no
 //! scenario-sized value is ever on the stack.
 //!
 //! ## Bad input
