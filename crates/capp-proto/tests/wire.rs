@@ -248,7 +248,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x02, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x03, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
