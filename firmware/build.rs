@@ -4,7 +4,9 @@
 //! * `nucleo-f446re`: `boards/nucleo-f446re/memory.x`.
 //!
 //! The chosen file is copied to `OUT_DIR/memory.x`, where cortex-m-rt's
-//! `link.x` includes it from.
+//! `link.x` includes it from; for the mps2-an386, whose device module is the
+//! firmware's own, also `boards/mps2-an386/device.x` (the F446's comes with
+//! its PAC).
 
 use std::{env, fs, path::PathBuf};
 
@@ -22,6 +24,13 @@ fn main() {
     };
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     fs::copy(&memory, out.join("memory.x")).unwrap();
+    if mps2 {
+        // The interrupt handlers' weak aliases, as a PAC's build script
+        // provides them (cortex-m-rt's `device` feature includes device.x).
+        let device = manifest.join("boards/mps2-an386/device.x");
+        fs::copy(&device, out.join("device.x")).unwrap();
+        println!("cargo:rerun-if-changed={}", device.display());
+    }
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", memory.display());
     println!("cargo:rerun-if-changed=build.rs");

@@ -32,20 +32,39 @@ step "firmware: format, lints, both boards"
   cargo build --release --no-default-features --features nucleo-f446re --target-dir target/f446
 )
 
-step "firmware size (flash = .vector_table + .text + .rodata + .data; RAM = .data + .bss + .uninit + stack)"
+step "firmware size (flash = .vector_table + .text + .rodata + .data <= 96 KiB; static RAM = .data + .bss + .uninit <= 32 KiB)"
 for elf in firmware/target/thumbv7em-none-eabihf/release/capp-firmware \
            firmware/target/f446/thumbv7em-none-eabihf/release/capp-firmware; do
   echo "$elf"
   size -A "$elf" | grep -E '^\.(vector_table|text|rodata|data|bss|uninit) '
+  size -A "$elf" | awk -v elf="$elf" '
+    $1 ~ /^\.(vector_table|text|rodata)$/ { flash += $2 }
+    $1 == ".data" { flash += $2; ram += $2 }
+    $1 ~ /^\.(bss|uninit)$/ { ram += $2 }
+    END {
+      printf "flash %d B (target 98304), static RAM %d B (target 32768)\n", flash, ram
+      if (flash > 98304 || ram > 32768) { print elf ": over the memory targets"; exit 1 }
+    }'
 done
 
 step "end to end under QEMU (mps2-an386)"
 CAPP_REQUIRE_QEMU=1 cargo test -p capp-system-tests -- --nocapture
 
+step "the stack guard under QEMU: a runaway recursion must fault at the MPU guard, the data below intact"
+(
+  cd firmware
+  cargo clippy --release --examples -- -D warnings
+  cargo build --release --example stack_guard
+)
+guard="$(timeout 60 qemu-system-arm -machine mps2-an386 -nographic -monitor none \
+  -semihosting-config enable=on,target=native \
+  -kernel firmware/target/thumbv7em-none-eabihf/release/examples/stack_guard)"
+echo "$guard"
+grep -q 'stack_guard: caught' <<<"$guard"
+
 step "M4F instruction counter under QEMU (smoke: it runs and finishes; BENCHMARKS.md has the figures)"
 (
   cd firmware
-  cargo clippy --release --example step_count -- -D warnings
   cargo build --release --example step_count
 )
 counts="$(timeout 120 qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=off -nographic \

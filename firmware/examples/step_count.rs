@@ -29,6 +29,11 @@ use capp_core::control::LawKind;
 use capp_core::{Planner, Scenario};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
+
+/// The board's interrupt vectors (cortex-m-rt's `device` feature is on).
+#[path = "../src/board/mps2_an386_pac.rs"]
+#[allow(dead_code, unused_imports)]
+mod pac;
 use cortex_m_semihosting::{debug, hprintln};
 use {defmt_semihosting as _, panic_semihosting as _};
 

@@ -1,14 +1,14 @@
-//! The control-loop timer: SysTick at a fixed rate, its interrupt counting ticks.
+//! The control-loop timer: SysTick at a fixed rate, its interrupt (an RTIC
+//! task, `main.rs`) counting ticks.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
-use cortex_m_rt::exception;
 
 static TICKS: AtomicU32 = AtomicU32::new(0);
 
-#[exception]
-fn SysTick() {
+/// The SysTick interrupt's work.
+pub fn on_tick() {
     TICKS.fetch_add(1, Ordering::Relaxed);
 }
 

@@ -71,6 +71,11 @@ pub struct LinkReport {
     pub overruns: u32,
     /// The board's deepest stack use, bytes (0: not measured).
     pub stack_peak: u32,
+    /// Received bytes the board's receive queue could not hold (since boot).
+    pub rx_overflows: u32,
+    /// Core clock cycles of one tick's work on the board: fewest, mean, most
+    /// (0: no cycle counter).
+    pub step_cycles: [u32; 3],
 }
 
 impl LinkReport {
@@ -117,8 +122,13 @@ impl fmt::Display for LinkReport {
         )?;
         writeln!(
             f,
-            "board:             {} timer overruns, peak stack {} bytes",
-            self.overruns, self.stack_peak
+            "board:             {} timer overruns, peak stack {} bytes, {} receive queue overflows",
+            self.overruns, self.stack_peak, self.rx_overflows
+        )?;
+        let [min, mean, max] = self.step_cycles;
+        writeln!(
+            f,
+            "board cycles/step: min {min}, mean {mean}, max {max} (core clock; emulated time under QEMU)"
         )
     }
 }
@@ -219,6 +229,12 @@ pub fn plan_on_board<T: Read + Write>(
         rejected,
         overruns: record.status.overruns,
         stack_peak: record.status.stack_peak,
+        rx_overflows: record.status.rx_overflows,
+        step_cycles: [
+            record.status.step_cycles_min,
+            record.status.step_cycles_mean,
+            record.status.step_cycles_max,
+        ],
     };
     Ok((
         RunResult {

@@ -132,6 +132,10 @@ fn bench(quick: bool) -> Result<()> {
             .args(["build", "--release"]))?;
         let elf = firmware.join("target/thumbv7em-none-eabihf/release/capp-firmware");
         let sizes = output(Command::new("size").arg("-A").arg(&elf))?;
+        // The Nucleo-F446RE build: sizes only (no hardware here).
+        run(Command::new(&cargo).current_dir(&firmware).args(["f446"]))?;
+        let f446_elf = firmware.join("target/f446/thumbv7em-none-eabihf/release/capp-firmware");
+        let f446_sizes = output(Command::new("size").arg("-A").arg(&f446_elf))?;
         let e2e = Command::new(&cargo)
             .current_dir(&root)
             .env("CAPP_REQUIRE_QEMU", "1")
@@ -155,7 +159,10 @@ fn bench(quick: bool) -> Result<()> {
         }
         let log = String::from_utf8_lossy(&e2e.stderr).into_owned()
             + &String::from_utf8_lossy(&e2e.stdout);
-        Some(report::FirmwareSize::parse(&sizes, &log))
+        Some(report::Firmware {
+            mps2: report::FirmwareSize::parse(&sizes, &log),
+            f446: report::FirmwareSize::parse(&f446_sizes, ""),
+        })
     };
 
     let machine = report::Machine::probe(&cargo);

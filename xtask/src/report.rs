@@ -87,6 +87,15 @@ fn visit(base: &Path, dir: &Path, host: &mut Host) -> Result<()> {
     Ok(())
 }
 
+/// Both boards' firmware.
+#[derive(Debug)]
+pub struct Firmware {
+    /// mps2-an386 (QEMU), with the peak stack from the end-to-end test.
+    pub mps2: FirmwareSize,
+    /// Nucleo-F446RE (build only).
+    pub f446: FirmwareSize,
+}
+
 /// The firmware binary's memory.
 #[derive(Debug)]
 pub struct FirmwareSize {
@@ -299,7 +308,7 @@ fn scaling(counts: &Counts, cost: impl Fn(usize, usize) -> Option<f64>) -> Vec<P
 pub fn tables(
     host: &Host,
     counts: &Counts,
-    firmware: Option<&FirmwareSize>,
+    firmware: Option<&Firmware>,
     machine: &Machine,
     quick: bool,
 ) -> String {
@@ -523,26 +532,37 @@ pub fn tables(
         "| stack of one `step()` (PIPS, 64 obstacles, painted) | {} |",
         opt(counts.get("memory", 18, 64, "step_stack_bytes"), grouped)
     );
+    let _ = writeln!(w);
+    let _ = writeln!(
+        w,
+        "The firmware (release ELF, `size -A`), with room for PIPS and 64 obstacles:"
+    );
+    let _ = writeln!(w);
     match firmware {
         Some(f) => {
+            let _ = writeln!(w, "| firmware | mps2-an386 | Nucleo-F446RE | target |");
+            let _ = writeln!(w, "|---|---|---|---|");
             let _ = writeln!(
                 w,
-                "| firmware (mps2-an386) flash: `.vector_table + .text + .rodata + .data` | {} |",
-                grouped(f.flash as f64)
+                "| flash: `.vector_table + .text + .rodata + .data` | {} | {} | <= 98 304 (96 KiB) |",
+                grouped(f.mps2.flash as f64),
+                grouped(f.f446.flash as f64)
             );
             let _ = writeln!(
                 w,
-                "| firmware static RAM: `.data + .bss + .uninit` | {} |",
-                grouped(f.static_ram as f64)
+                "| static RAM: `.data + .bss + .uninit` | {} | {} | <= 32 768 (32 KiB) |",
+                grouped(f.mps2.static_ram as f64),
+                grouped(f.f446.static_ram as f64)
             );
             let _ = writeln!(
                 w,
-                "| firmware peak stack (painted, QEMU end-to-end test) | {} |",
-                f.peak_stack.map_or("-".into(), |p| grouped(p as f64))
+                "| peak stack (painted; QEMU end-to-end test) | {} | same code; not measured on hardware | <= 8 192 (8 KiB) |",
+                f.mps2.peak_stack.map_or("-".into(), |p| grouped(p as f64))
             );
         }
         None => {
             let _ = writeln!(w, "| firmware | not measured (`--quick`) |");
+            let _ = writeln!(w, "|---|---|");
         }
     }
     let _ = writeln!(w);

@@ -181,6 +181,23 @@ impl<const N: usize> Evaluation<N> {
         }
     }
 
+    /// Every field to its initial value, in place.
+    fn reset(&mut self) {
+        // Every field is named: a field added to `Evaluation` fails to compile here.
+        let Evaluation {
+            frames,
+            error,
+            mu,
+            distance_sq,
+            field,
+        } = self;
+        *frames = Frames::default();
+        *error = PoseError::default();
+        mu.fill(0.0);
+        distance_sq.fill(0.0);
+        *field = ObstacleField::default();
+    }
+
     fn evaluate<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
@@ -239,6 +256,74 @@ impl<const N: usize> Planner<N> {
         scenario: &Scenario<N, M, W>,
         start: &[f32],
     ) -> Result<Self, StartError> {
+        let mut planner = Self::empty();
+        planner.restart(scenario, start)?;
+        Ok(planner)
+    }
+
+    /// A planner with no joints and nothing to do (`Done`): a placeholder
+    /// for a planner started in place by [`Planner::restart`] (a board keeps
+    /// its workspace in a `static`). Stepping it changes nothing.
+    pub fn empty() -> Self {
+        let mut planner = Planner {
+            n: 0,
+            q: [0.0; N],
+            now: Evaluation::new(),
+            next: Evaluation::new(),
+            q_next: [0.0; N],
+            terms: [[0.0; N]; 4],
+            drive: [0.0; N],
+            rate: [0.0; N],
+            gain: [0.0; N],
+            columns: [0.0; N],
+            locked: [false; N],
+            damped: DampedWorkspace::default(),
+            step: 0,
+            phase: Phase::Done(Outcome::Stalled),
+            error_step: 0.0,
+            best_v: f32::INFINITY,
+            best_step: 0,
+            last: StepReport {
+                step: 0,
+                time_step_s: 0.0,
+                v: 0.0,
+                position_error: 0.0,
+                orientation_error: 0.0,
+                clearance: None,
+                phase: Phase::Done(Outcome::Stalled),
+                constrained: false,
+                halvings: 0,
+            },
+        };
+        planner.reset(&[]);
+        planner
+    }
+
+    /// [`Planner::new`] in place: the same checks and the same plan (to the
+    /// bit), without a planner-sized value on the stack. On error `self` is
+    /// left as [`Planner::empty`].
+    pub fn restart<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        start: &[f32],
+    ) -> Result<(), StartError> {
+        let result = self.begin(scenario, start);
+        if result.is_err() {
+            self.clear();
+        }
+        result
+    }
+
+    /// Makes this planner [`Planner::empty`], in place.
+    pub fn clear(&mut self) {
+        self.reset(&[]);
+    }
+
+    fn begin<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        start: &[f32],
+    ) -> Result<(), StartError> {
         let robot = scenario.robot();
         let n = robot.len();
         if start.len() != n {
@@ -253,45 +338,15 @@ impl<const N: usize> Planner<N> {
         if let Some(joint) = robot.first_outside_limits(start) {
             return Err(StartError::OutsideLimits { joint: joint as u8 });
         }
-        let mut q = [0.0; N];
-        q[..n].copy_from_slice(start);
-        let mut planner = Planner {
-            n,
-            q,
-            now: Evaluation::new(),
-            next: Evaluation::new(),
-            q_next: q,
-            terms: [[0.0; N]; 4],
-            drive: [0.0; N],
-            rate: [0.0; N],
-            gain: [0.0; N],
-            columns: [0.0; N],
-            locked: [false; N],
-            damped: DampedWorkspace::default(),
-            step: 0,
-            phase: Phase::Moving { waypoint: 0 },
-            error_step: 0.0,
-            best_v: f32::INFINITY,
-            best_step: 0,
-            last: StepReport {
-                step: 0,
-                time_step_s: 0.0,
-                v: 0.0,
-                position_error: 0.0,
-                orientation_error: 0.0,
-                clearance: None,
-                phase: Phase::Moving { waypoint: 0 },
-                constrained: false,
-                halvings: 0,
-            },
-        };
+        self.reset(start);
         // Scenario::new refuses a mission without waypoints, so this never fails.
         let Some(&target) = scenario.targets().first() else {
             return Err(StartError::ScenarioMismatch);
         };
-        planner.now.evaluate(scenario, &planner.q[..n], &target);
-        if !planner.now.field.clear {
-            let c = planner.now.field.clearance.unwrap_or(Clearance {
+        let n = self.n.min(N);
+        self.now.evaluate(scenario, &self.q[..n], &target);
+        if !self.now.field.clear {
+            let c = self.now.field.clearance.unwrap_or(Clearance {
                 value: 0.0,
                 point: 0,
                 obstacle: 0,
@@ -301,9 +356,71 @@ impl<const N: usize> Planner<N> {
                 obstacle: c.obstacle,
             });
         }
-        planner.best_v = planner.now.error.v;
-        planner.last = planner.report(0.0, false, 0);
-        Ok(planner)
+        self.best_v = self.now.error.v;
+        self.last = self.report(0.0, false, 0);
+        Ok(())
+    }
+
+    /// Every field to its value at the start of a plan from `start` (at most
+    /// `N` values; none: the empty planner), in place.
+    fn reset(&mut self, start: &[f32]) {
+        // Every field is named: a field added to `Planner` fails to compile here.
+        let Planner {
+            n,
+            q,
+            now,
+            next,
+            q_next,
+            terms,
+            drive,
+            rate,
+            gain,
+            columns,
+            locked,
+            damped,
+            step,
+            phase,
+            error_step,
+            best_v,
+            best_step,
+            last,
+        } = self;
+        let len = start.len().min(N);
+        *n = len;
+        q.fill(0.0);
+        q[..len].copy_from_slice(&start[..len]);
+        now.reset();
+        next.reset();
+        *q_next = *q;
+        for t in terms.iter_mut() {
+            t.fill(0.0);
+        }
+        drive.fill(0.0);
+        rate.fill(0.0);
+        gain.fill(0.0);
+        columns.fill(0.0);
+        locked.fill(false);
+        damped.clear();
+        *step = 0;
+        *phase = if len == 0 {
+            Phase::Done(Outcome::Stalled)
+        } else {
+            Phase::Moving { waypoint: 0 }
+        };
+        *error_step = 0.0;
+        *best_v = f32::INFINITY;
+        *best_step = 0;
+        *last = StepReport {
+            step: 0,
+            time_step_s: 0.0,
+            v: 0.0,
+            position_error: 0.0,
+            orientation_error: 0.0,
+            clearance: None,
+            phase: *phase,
+            constrained: false,
+            halvings: 0,
+        };
     }
 
     /// The current joint vector (`n` values: radians or length units).

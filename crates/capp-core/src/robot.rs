@@ -252,6 +252,43 @@ impl<const N: usize> Robot<N> {
     /// Rejects: an empty chain, more than `N` joints (or more than 255), any
     /// non-finite field, `min >= max`, `max_rate <= 0`, weight outside `(0, 1]`.
     pub fn new(joints: &[Joint]) -> Result<Self, RobotError> {
+        let mut robot = Self::empty();
+        robot.init(joints)?;
+        Ok(robot)
+    }
+
+    /// A robot with no joints: a placeholder for a robot built in place by
+    /// [`Robot::init`] (a board keeps its model in a `static`). No planner
+    /// starts on it.
+    pub fn empty() -> Self {
+        Robot {
+            joints: heapless::Vec::new(),
+            links: [LinkConstants::default(); N],
+        }
+    }
+
+    /// [`Robot::new`] in place: the same checks, the same robot, no
+    /// robot-sized value on the stack. On error `self` is left empty.
+    pub fn init(&mut self, joints: &[Joint]) -> Result<(), RobotError> {
+        let result = self.fill(joints);
+        if result.is_err() {
+            self.clear();
+        }
+        result
+    }
+
+    /// Empties the robot (see [`Robot::empty`]).
+    pub(crate) fn clear(&mut self) {
+        let Robot { joints, links } = self;
+        joints.clear();
+        links.fill(LinkConstants::default());
+    }
+
+    fn fill(&mut self, joints: &[Joint]) -> Result<(), RobotError> {
+        // Every field is rebuilt: a field added to `Robot` fails to compile here.
+        let Robot { joints: out, links } = self;
+        out.clear();
+        links.fill(LinkConstants::default());
         if joints.is_empty() {
             return Err(RobotError::Empty);
         }
@@ -261,8 +298,6 @@ impl<const N: usize> Robot<N> {
                 capacity: N.min(u8::MAX as usize),
             });
         }
-        let mut out = heapless::Vec::new();
-        let mut links = [LinkConstants::default(); N];
         let mut chain = 0.0f32;
         for (i, (j, link)) in joints.iter().zip(links.iter_mut()).enumerate() {
             let joint = i as u8;
@@ -321,7 +356,7 @@ impl<const N: usize> Robot<N> {
             // Capacity was checked above, so the push cannot fail.
             let _ = out.push(*j);
         }
-        Ok(Robot { joints: out, links })
+        Ok(())
     }
 
     /// Number of joints `n`.
@@ -332,7 +367,8 @@ impl<const N: usize> Robot<N> {
         self.joints.len().min(N)
     }
 
-    /// Always false: a validated robot has at least one joint.
+    /// False for every validated robot (it has at least one joint); true
+    /// only for [`Robot::empty`].
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.joints.is_empty()

@@ -5,7 +5,7 @@ use crate::control::Target;
 use crate::math::{is_rotation, vec3, Mat3};
 use crate::mission::{Mission, MissionError, Settings, Waypoint};
 use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
-use crate::robot::{Robot, RobotError};
+use crate::robot::{Joint, Robot, RobotError};
 
 /// Tolerance on `R^T R - I` and `det R - 1` for a target orientation.
 pub const ROTATION_TOLERANCE: f32 = 1.0e-3;
@@ -65,7 +65,80 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         obstacles: &[SuperEllipsoid],
         mission: &Mission<W>,
     ) -> Result<Self, ScenarioError> {
-        let settings = mission.settings;
+        let mut scenario = Self::empty();
+        scenario.robot = robot;
+        scenario.fill(obstacles, &mission.waypoints, mission.settings)?;
+        Ok(scenario)
+    }
+
+    /// A scenario with no robot, obstacles or waypoints: a placeholder for a
+    /// scenario built in place by [`Scenario::init`] (a board keeps its model
+    /// in a `static`). No planner starts on it.
+    pub fn empty() -> Self {
+        Scenario {
+            robot: Robot::empty(),
+            obstacles: heapless::Vec::new(),
+            waypoints: heapless::Vec::new(),
+            targets: heapless::Vec::new(),
+            settings: Settings::default(),
+        }
+    }
+
+    /// [`Robot::new`], [`Mission::new`] and [`Scenario::new`] in place: the
+    /// same checks in the same order and the same scenario, without a
+    /// scenario-sized value on the stack (17 KiB for PIPS with room for 64
+    /// obstacles). On error `self` is left empty (as [`Scenario::empty`]).
+    pub fn init(
+        &mut self,
+        joints: &[Joint],
+        obstacles: &[SuperEllipsoid],
+        waypoints: &[Waypoint],
+        settings: Settings,
+    ) -> Result<(), ScenarioError> {
+        let result = self
+            .robot
+            .init(joints)
+            .map_err(ScenarioError::from)
+            .and_then(|()| {
+                if waypoints.len() > W {
+                    Err(MissionError::TooManyWaypoints { capacity: W }.into())
+                } else {
+                    Ok(())
+                }
+            })
+            .and_then(|()| self.fill(obstacles, waypoints, settings));
+        if result.is_err() {
+            self.clear();
+        }
+        result
+    }
+
+    /// Makes this scenario [`Scenario::empty`], in place.
+    pub fn clear(&mut self) {
+        self.robot.clear();
+        let _ = self.fill(&[], &[], Settings::default());
+    }
+
+    /// Rebuilds every field but the robot (validated by `Robot::new` /
+    /// `Robot::init`), in place; shared by `new` and `init`.
+    fn fill(
+        &mut self,
+        obstacles: &[SuperEllipsoid],
+        waypoints: &[Waypoint],
+        settings: Settings,
+    ) -> Result<(), ScenarioError> {
+        // Every field is named: a field added to `Scenario` fails to compile here.
+        let Scenario {
+            robot: _,
+            obstacles: validated,
+            waypoints: kept,
+            targets,
+            settings: kept_settings,
+        } = self;
+        validated.clear();
+        kept.clear();
+        targets.clear();
+        *kept_settings = settings;
         settings.validate()?;
         if obstacles.len() > M || obstacles.len() > u8::MAX as usize + 1 {
             return Err(ObstacleError::TooMany {
@@ -73,7 +146,6 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             }
             .into());
         }
-        let mut validated = heapless::Vec::new();
         for (i, s) in obstacles.iter().enumerate() {
             let o = Obstacle::new(
                 i as u8,
@@ -83,11 +155,10 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             )?;
             let _ = validated.push(o);
         }
-        if mission.waypoints.is_empty() {
+        if waypoints.is_empty() {
             return Err(MissionError::NoWaypoints.into());
         }
-        let mut targets = heapless::Vec::new();
-        for (i, w) in mission.waypoints.iter().enumerate() {
+        for (i, w) in waypoints.iter().enumerate() {
             let waypoint = i as u8;
             if !w
                 .position
@@ -109,18 +180,14 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
                     Some(r)
                 }
             };
+            kept.push(*w)
+                .map_err(|_| MissionError::TooManyWaypoints { capacity: W })?;
             let _ = targets.push(Target {
                 position: vec3(w.position),
                 orientation,
             });
         }
-        Ok(Scenario {
-            robot,
-            obstacles: validated,
-            waypoints: mission.waypoints.clone(),
-            targets,
-            settings,
-        })
+        Ok(())
     }
 
     /// The robot.

@@ -11,7 +11,7 @@
 //! ## Transmit policy (what happens when the UART cannot keep up)
 //!
 //! Frames wait in a bounded byte queue of `TXQ` bytes that [`Node::poll`]
-//! drains without blocking. `RESERVE = 2 * MAX_FRAME` bytes of it are kept for
+//! (or [`Node::poll_queue`]) drains without blocking. `RESERVE = 2 * MAX_FRAME` bytes of it are kept for
 //! replies:
 //!
 //! * **Setpoints** are queued only if they fit with the reserve left free;
@@ -19,14 +19,37 @@
 //!   the same (the host sees the gap) and `Status::dropped` counts it. The
 //!   planner never waits for the UART: the control loop keeps its rate.
 //! * **Replies** (acks, errors, pongs, statuses) are never dropped: a byte is
-//!   read from the UART only while the reserve is free, so a command's reply
-//!   always fits; a host that floods the board is slowed down, not ignored.
+//!   taken from the UART (or the receive queue) only while the reserve is
+//!   free, so a command's reply always fits; a host that floods the board is
+//!   slowed down, not ignored (with receive by interrupt, bytes that no
+//!   longer fit the receive queue are dropped and counted, `Status::rx_overflows`,
+//!   and their frame is answered with an error).
 //! * The **final status** of a plan waits, if the queue is full, until it fits.
+//!
+//! ## Receive
+//!
+//! The boards receive by interrupt ([`rx`]): the UART's interrupt puts bytes
+//! into a fixed-size queue at a higher priority than the planner step, and
+//! [`serve_queued`] drains it between steps, so a command sent while a plan
+//! runs (`Stop`, the host's `Status` poll) is never lost to a one-byte
+//! receive register. [`serve`] is the polled loop (bytes read from the UART
+//! between steps), kept for UARTs that hold bytes back (a host socket).
 //!
 //! ## Timing
 //!
 //! One planner step per tick. Ticks that arrive while a step runs are not
-//! made up: they count as `Status::overruns`.
+//! made up: they count as `Status::overruns`. With a cycle counter
+//! ([`Node::set_cycle_counter`]) each tick's work is timed and the fewest,
+//! mean and most cycles of the plan go into `Status::step_cycles_*`.
+//!
+//! ## Memory
+//!
+//! A node is about 30 KiB (the model for 32 joints and 64 obstacles, the
+//! workspace, the draft load, the transmit queue). A board keeps it in a
+//! `static` (zeroed storage in `.bss`, made a node in place by
+//! [`Node::reset`]) and never moves it: `Run` re-initialises the scenario and
+//! the planner in place (`Scenario::init`, `Planner::restart`), so no
+//! scenario-sized value is ever on the stack.
 //!
 //! ## Bad input
 //!
@@ -41,11 +64,12 @@
 extern crate std;
 
 mod log;
+pub mod rx;
 
 use capp_core::setpoint::Decimator;
 use capp_core::{
-    Mission, MissionError, ObstacleError, Phase, Planner, Robot, RobotError, Scenario,
-    ScenarioError, SetpointFilter, StartError, SuperEllipsoid,
+    MissionError, ObstacleError, Phase, Planner, RobotError, Scenario, ScenarioError,
+    SetpointFilter, StartError, SuperEllipsoid,
 };
 use capp_proto::{
     Command, ErrorCode, FrameError, Part, Preset, Reply, State, Status, MAX_FRAME, MAX_JOINTS as N,
@@ -53,6 +77,7 @@ use capp_proto::{
 };
 use embedded_hal_nb::{nb, serial};
 use heapless::{Deque, Vec};
+use rx::{Consumer, RxCounters};
 
 /// Bytes of the transmit queue kept free for replies.
 pub const RESERVE: usize = 2 * MAX_FRAME;
@@ -84,9 +109,46 @@ impl Draft {
             start: Vec::new(),
         }
     }
+
+    /// [`Draft::new`] in place.
+    fn clear(&mut self) {
+        let Draft {
+            joints,
+            obstacles,
+            waypoints,
+            settings,
+            start,
+        } = self;
+        joints.clear();
+        obstacles.clear();
+        waypoints.clear();
+        *settings = None;
+        start.clear();
+    }
 }
 
-/// A validated plan in progress (or finished).
+/// The status of a board that has run nothing.
+const IDLE: Status = Status {
+    state: State::Idle,
+    outcome: None,
+    step: 0,
+    v: 0.0,
+    position_error: 0.0,
+    orientation_error: 0.0,
+    clearance: None,
+    setpoints: 0,
+    dropped: 0,
+    rx_errors: 0,
+    overruns: 0,
+    stack_peak: 0,
+    rx_overflows: 0,
+    step_cycles_min: 0,
+    step_cycles_mean: 0,
+    step_cycles_max: 0,
+};
+
+/// The plan: valid while `Status::state` is `Running` (and after, until the
+/// next `Run`), re-initialised in place by `Run`.
 struct Active {
     scenario: Scenario<N, M, W>,
     planner: Planner<N>,
@@ -105,10 +167,43 @@ pub struct Node<const TXQ: usize> {
     rx: capp_proto::Accumulator<{ MAX_FRAME - 1 }>,
     tx: Deque<u8, TXQ>,
     draft: Draft,
-    active: Option<Active>,
+    plan: Active,
     status: Status,
     final_pending: bool,
     stack_probe: Option<fn() -> u32>,
+    cycle_counter: Option<fn() -> u32>,
+    cycles: CycleStats,
+    /// `RxCounters::line_errors` already added to `status.rx_errors`.
+    line_errors_seen: u32,
+}
+
+/// Cycles per tick's work in the current plan.
+#[derive(Clone, Copy, Debug, Default)]
+struct CycleStats {
+    min: u32,
+    max: u32,
+    sum: u64,
+    count: u32,
+}
+
+impl CycleStats {
+    fn add(&mut self, cycles: u32) {
+        self.min = if self.count == 0 {
+            cycles
+        } else {
+            self.min.min(cycles)
+        };
+        self.max = self.max.max(cycles);
+        self.sum = self.sum.wrapping_add(cycles as u64);
+        self.count = self.count.saturating_add(1);
+    }
+
+    fn mean(&self) -> u32 {
+        match self.count {
+            0 => 0,
+            n => (self.sum / n as u64).min(u32::MAX as u64) as u32,
+        }
+    }
 }
 
 fn finite(xs: &[f32]) -> bool {
@@ -122,31 +217,78 @@ impl<const TXQ: usize> Default for Node<TXQ> {
 }
 
 impl<const TXQ: usize> Node<TXQ> {
-    /// A node with nothing loaded. `const`, so a board can place it in a
-    /// `static` without building it on the stack first.
-    pub const fn new() -> Self {
+    /// A node with nothing loaded, by value (about 30 KiB: for a host). A
+    /// board keeps its node in a `static` and calls [`Node::reset`] on it
+    /// instead, so that it is never built on the stack.
+    pub fn new() -> Self {
         Node {
             rx: capp_proto::Accumulator::new(),
             tx: Deque::new(),
             draft: Draft::new(),
-            active: None,
-            status: Status {
-                state: State::Idle,
-                outcome: None,
-                step: 0,
-                v: 0.0,
-                position_error: 0.0,
-                orientation_error: 0.0,
-                clearance: None,
-                setpoints: 0,
-                dropped: 0,
-                rx_errors: 0,
-                overruns: 0,
-                stack_peak: 0,
+            plan: Active {
+                scenario: Scenario::empty(),
+                planner: Planner::empty(),
+                decimator: Decimator::new(SetpointFilter::Every(1)),
+                streaming: false,
+                time_s: 0.0,
             },
+            status: IDLE,
             final_pending: false,
             stack_probe: None,
+            cycle_counter: None,
+            cycles: CycleStats {
+                min: 0,
+                max: 0,
+                sum: 0,
+                count: 0,
+            },
+            line_errors_seen: 0,
         }
+    }
+
+    /// [`Node::new`] in place: every field back to its initial value, with
+    /// no node-sized (or scenario-sized) value on the stack.
+    pub fn reset(&mut self) {
+        // Every field is named: a field added to `Node` fails to compile here.
+        let Node {
+            rx,
+            tx,
+            draft,
+            plan,
+            status,
+            final_pending,
+            stack_probe,
+            cycle_counter,
+            cycles,
+            line_errors_seen,
+        } = self;
+        *rx = capp_proto::Accumulator::new();
+        tx.clear();
+        draft.clear();
+        let Active {
+            scenario,
+            planner,
+            decimator,
+            streaming,
+            time_s,
+        } = plan;
+        scenario.clear();
+        planner.clear();
+        *decimator = Decimator::new(SetpointFilter::Every(1));
+        *streaming = false;
+        *time_s = 0.0;
+        *status = IDLE;
+        *final_pending = false;
+        *stack_probe = None;
+        *cycle_counter = None;
+        *cycles = CycleStats::default();
+        *line_errors_seen = 0;
+    }
+
+    /// Sets the free-running cycle counter (wrapping `u32`, e.g. the DWT's
+    /// `CYCCNT`) that times each tick's work, for `Status::step_cycles_*`.
+    pub fn set_cycle_counter(&mut self, counter: fn() -> u32) {
+        self.cycle_counter = Some(counter);
     }
 
     /// Sets the function that measures the deepest stack use, for `Status`.
@@ -167,17 +309,12 @@ impl<const TXQ: usize> Node<TXQ> {
     /// Moves bytes between the UART and the node without blocking: queued
     /// bytes out while the UART takes them, received bytes in (and their
     /// commands answered) while the reply reserve is free.
+    ///
+    /// This is the polled design: bytes that arrive while a planner step runs
+    /// wait in the UART; a UART that holds one byte loses the rest (see
+    /// [`rx`] and [`Node::poll_queue`]).
     pub fn poll<S: serial::Read<u8> + serial::Write<u8>>(&mut self, uart: &mut S) {
-        self.flush_final();
-        while let Some(&b) = self.tx.front() {
-            match uart.write(b) {
-                Ok(()) => {
-                    self.tx.pop_front();
-                }
-                Err(nb::Error::WouldBlock) => break,
-                Err(nb::Error::Other(_)) => break,
-            }
-        }
+        self.send(uart);
         while TXQ - self.tx.len() >= RESERVE {
             match uart.read() {
                 Ok(b) => self.receive(b),
@@ -188,6 +325,44 @@ impl<const TXQ: usize> Node<TXQ> {
                     self.status.rx_errors = self.status.rx_errors.wrapping_add(1);
                     break;
                 }
+            }
+        }
+    }
+
+    /// Moves bytes without blocking, receive by interrupt: queued bytes out
+    /// while the UART takes them, bytes the receive interrupt queued
+    /// ([`rx::on_interrupt`]) in (and their commands answered) while the
+    /// reply reserve is free; the interrupt's counts into the status.
+    pub fn poll_queue<W: serial::Write<u8>, const Q: usize>(
+        &mut self,
+        uart: &mut W,
+        queue: &mut Consumer<'_, u8, Q>,
+        counters: &RxCounters,
+    ) {
+        self.send(uart);
+        self.status.rx_overflows = counters.overflows();
+        let line_errors = counters.line_errors();
+        let new = line_errors.wrapping_sub(self.line_errors_seen);
+        self.line_errors_seen = line_errors;
+        self.status.rx_errors = self.status.rx_errors.wrapping_add(new);
+        while TXQ - self.tx.len() >= RESERVE {
+            match queue.dequeue() {
+                Some(b) => self.receive(b),
+                None => break,
+            }
+        }
+    }
+
+    /// Queued bytes out while the UART takes them.
+    fn send<W: serial::Write<u8>>(&mut self, uart: &mut W) {
+        self.flush_final();
+        while let Some(&b) = self.tx.front() {
+            match uart.write(b) {
+                Ok(()) => {
+                    self.tx.pop_front();
+                }
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(_)) => break,
             }
         }
     }
@@ -333,19 +508,25 @@ impl<const TXQ: usize> Node<TXQ> {
     /// serving loop.
     #[inline(never)]
     fn start(&mut self, filter: SetpointFilter) -> Result<(), Refusal> {
+        // Built in place: a refused load leaves an empty plan, never stepped
+        // (the state is not `Running`), and the status as it was.
         let d = &self.draft;
-        let robot = Robot::<N>::new(&d.joints).map_err(robot_refusal)?;
-        let mission = Mission::<W>::new(&d.waypoints, d.settings.unwrap_or_default())
-            .map_err(|e| scenario_refusal(e.into()))?;
-        let scenario = Scenario::new(robot, &d.obstacles, &mission).map_err(scenario_refusal)?;
-        let planner = Planner::new(&scenario, &d.start).map_err(start_refusal)?;
-        self.active = Some(Active {
-            scenario,
-            planner,
-            decimator: Decimator::new(filter),
-            streaming: false,
-            time_s: 0.0,
-        });
+        let plan = &mut self.plan;
+        plan.scenario
+            .init(
+                &d.joints,
+                &d.obstacles,
+                &d.waypoints,
+                d.settings.unwrap_or_default(),
+            )
+            .map_err(scenario_refusal)?;
+        plan.planner
+            .restart(&plan.scenario, &d.start)
+            .map_err(start_refusal)?;
+        plan.decimator = Decimator::new(filter);
+        plan.streaming = false;
+        plan.time_s = 0.0;
+        self.cycles = CycleStats::default();
         let s = &mut self.status;
         s.state = State::Running;
         s.outcome = None;
@@ -353,6 +534,9 @@ impl<const TXQ: usize> Node<TXQ> {
         s.setpoints = 0;
         s.dropped = 0;
         s.overruns = 0;
+        s.step_cycles_min = 0;
+        s.step_cycles_mean = 0;
+        s.step_cycles_max = 0;
         log::info!("plan started");
         Ok(())
     }
@@ -367,18 +551,14 @@ impl<const TXQ: usize> Node<TXQ> {
             return;
         }
         self.status.overruns = self.status.overruns.wrapping_add(ticks - 1);
-        let Some(active) = self.active.as_mut() else {
-            return;
-        };
-        if !active.streaming {
+        let started = self.cycle_counter.map(|c| c());
+        if !self.plan.streaming {
             // The start configuration is the stream's first setpoint (seq 0).
-            active.streaming = true;
-            let start = *active.planner.last_report();
+            self.plan.streaming = true;
+            let start = *self.plan.planner.last_report();
             self.offer_setpoint(&start);
         }
-        let Some(active) = self.active.as_mut() else {
-            return;
-        };
+        let active = &mut self.plan;
         let report = match active.planner.step(&active.scenario) {
             Ok(r) => r,
             Err(_) => {
@@ -396,12 +576,26 @@ impl<const TXQ: usize> Node<TXQ> {
         s.orientation_error = report.orientation_error;
         s.clearance = report.clearance.map(|c| c.value);
         self.offer_setpoint(&report);
+        if let (Some(counter), Some(t0)) = (self.cycle_counter, started) {
+            self.cycles.add(counter().wrapping_sub(t0));
+            let s = &mut self.status;
+            s.step_cycles_min = self.cycles.min;
+            s.step_cycles_mean = self.cycles.mean();
+            s.step_cycles_max = self.cycles.max;
+        }
         let s = &mut self.status;
         if let Phase::Done(outcome) = report.phase {
             s.state = State::Done;
             s.outcome = Some(outcome.into());
             self.final_pending = true;
-            log::info!("plan done after {} steps", report.step);
+            log::info!(
+                "plan done after {} steps; cycles per step min {} mean {} max {}, overruns {}",
+                report.step,
+                s.step_cycles_min,
+                s.step_cycles_mean,
+                s.step_cycles_max,
+                s.overruns
+            );
             self.flush_final();
         }
     }
@@ -410,9 +604,7 @@ impl<const TXQ: usize> Node<TXQ> {
     /// takes the next sequence number and is queued, or dropped (and counted)
     /// if it does not fit beside the reply reserve.
     fn offer_setpoint(&mut self, report: &capp_core::StepReport) {
-        let Some(active) = self.active.as_mut() else {
-            return;
-        };
+        let active = &mut self.plan;
         if !active.decimator.offer(report) {
             return;
         }
@@ -473,7 +665,8 @@ impl<const TXQ: usize> Node<TXQ> {
     }
 }
 
-/// Serves forever: the board's main loop.
+/// Serves forever, polled: the UART read between steps ([`Node::poll`]).
+/// For UARTs that hold bytes back; the boards use [`serve_queued`].
 pub fn serve<const TXQ: usize, S, T>(node: &mut Node<TXQ>, uart: &mut S, ticker: &mut T) -> !
 where
     S: serial::Read<u8> + serial::Write<u8>,
@@ -481,6 +674,28 @@ where
 {
     loop {
         node.poll(uart);
+        let ticks = ticker.take();
+        node.tick(ticks);
+    }
+}
+
+/// Serves forever, receive by interrupt: the boards' main loop (thread mode,
+/// the lowest priority). The UART's receive interrupt fills `queue` with
+/// [`rx::on_interrupt`]; this loop sends, drains the queue and takes one
+/// planner step per tick ([`Node::poll_queue`], [`Node::tick`]).
+pub fn serve_queued<const TXQ: usize, const Q: usize, W, T>(
+    node: &mut Node<TXQ>,
+    uart_tx: &mut W,
+    queue: &mut Consumer<'_, u8, Q>,
+    counters: &RxCounters,
+    ticker: &mut T,
+) -> !
+where
+    W: serial::Write<u8>,
+    T: Ticker,
+{
+    loop {
+        node.poll_queue(uart_tx, queue, counters);
         let ticks = ticker.take();
         node.tick(ticks);
     }

@@ -13,6 +13,8 @@ use embedded_hal_nb::{nb, serial};
 
 use super::*;
 
+mod line;
+
 /// A UART that takes at most `budget` bytes per `refill` (a slow line).
 struct FakeUart {
     rx: VecDeque<u8>,
@@ -68,6 +70,16 @@ fn replies(bytes: &[u8]) -> Vec<Reply> {
         .collect()
 }
 
+/// The frames in `bytes` that decode, skipping damaged ones.
+fn replies_lossy(bytes: &[u8]) -> Vec<Reply> {
+    let mut acc = Accumulator::<{ MAX_FRAME - 1 }>::new();
+    bytes
+        .iter()
+        .filter_map(|&b| acc.feed_message::<Reply>(b))
+        .filter_map(Result::ok)
+        .collect()
+}
+
 fn target() -> capp_core::Waypoint {
     let robot = pips::robot::<32>().unwrap();
     // Far enough for a plan of about a hundred steps.
@@ -84,8 +96,13 @@ fn target() -> capp_core::Waypoint {
 /// The host's plan: the start, then the joint vector after every step, each
 /// with its plan time (the f32 sum of the step sizes, as the board keeps it).
 fn host_plan() -> Vec<(Vec<f32>, f32)> {
+    host_plan_with(capp_core::Settings::default())
+}
+
+/// [`host_plan`] with `settings`.
+fn host_plan_with(settings: capp_core::Settings) -> Vec<(Vec<f32>, f32)> {
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
-    let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
+    let mission = Mission::<16>::new(&[target()], settings).unwrap();
     let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut out = std::vec![(planner.joints().to_vec(), 0.0)];
@@ -100,13 +117,37 @@ fn host_plan() -> Vec<(Vec<f32>, f32)> {
     }
 }
 
+/// PIPS to [`target`], default settings: what [`host_plan`] plans.
+fn load_commands() -> Vec<Command> {
+    std::vec![
+        Command::Clear(Part::All),
+        Command::Preset(Preset::Pips),
+        Command::Waypoint {
+            index: 0,
+            waypoint: target().into(),
+        },
+    ]
+}
+
+/// [`load_commands`] then `settings`: what [`host_plan_with`] plans.
+fn load_commands_with(settings: capp_core::Settings) -> Vec<Command> {
+    let mut commands = load_commands();
+    commands.push(Command::Settings(settings.into()));
+    commands
+}
+
+/// Settings for a plan of a thousand steps or so (the first-order gradient
+/// law): long enough for a host to send many commands while it runs.
+fn long_plan() -> capp_core::Settings {
+    let mut s = capp_core::Settings::default();
+    s.law.kind = capp_core::control::LawKind::Gradient;
+    s
+}
+
 fn load(uart: &mut FakeUart) {
-    uart.send(&Command::Clear(Part::All));
-    uart.send(&Command::Preset(Preset::Pips));
-    uart.send(&Command::Waypoint {
-        index: 0,
-        waypoint: target().into(),
-    });
+    for c in load_commands() {
+        uart.send(&c);
+    }
 }
 
 /// Runs a plan with `budget` bytes of UART per tick; returns all replies after `Run`'s ack.
@@ -123,6 +164,11 @@ fn run_plan(budget: usize) -> (Vec<Reply>, Vec<(Vec<f32>, f32)>) {
 /// [`run_plan`] started by `run`.
 fn run_plan_with(budget: usize, run: Command) -> (Vec<Reply>, Vec<(Vec<f32>, f32)>) {
     let mut node = Node::<2048>::new();
+    (run_on(&mut node, budget, run), host_plan())
+}
+
+/// [`run_plan_with`] on `node`; the replies only.
+fn run_on(node: &mut Node<2048>, budget: usize, run: Command) -> Vec<Reply> {
     let mut uart = FakeUart::new(usize::MAX);
     load(&mut uart);
     uart.send(&run);
@@ -144,7 +190,41 @@ fn run_plan_with(budget: usize, run: Command) -> (Vec<Reply>, Vec<(Vec<f32>, f32
             break;
         }
     }
-    (replies(&uart.tx), host_plan())
+    replies(&uart.tx)
+}
+
+#[test]
+fn a_reset_node_is_a_new_node() {
+    let run = || Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    let fresh = run_on(&mut Node::new(), usize::MAX, run());
+    // A node in some other state: another plan stopped half way, a draft with
+    // obstacles and settings, a bad frame counted, replies still queued.
+    let mut node = Node::<2048>::new();
+    node.set_cycle_counter(|| 7);
+    let mut uart = FakeUart::new(usize::MAX);
+    load(&mut uart);
+    uart.send(&Command::Settings(capp_core::Settings::default().into()));
+    uart.send(&run());
+    node.poll(&mut uart);
+    for _ in 0..20 {
+        node.tick(1);
+    }
+    uart.send(&Command::Obstacle {
+        index: 0,
+        obstacle: capp_core::SuperEllipsoid::aligned([500.0; 3], [1.0; 3], 2.0).into(),
+    });
+    uart.rx.extend([1, 2, 3, 0]);
+    uart.budget = 0;
+    uart.left = 0;
+    node.poll(&mut uart);
+    assert!(node.tx_len() > 0 && node.status().rx_errors == 1);
+    node.reset();
+    assert_eq!(node.status(), Node::<2048>::new().status());
+    assert_eq!(node.tx_len(), 0);
+    assert_eq!(run_on(&mut node, usize::MAX, run()), fresh);
 }
 
 #[test]

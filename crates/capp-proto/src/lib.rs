@@ -363,6 +363,18 @@ pub struct Status {
     pub overruns: u32,
     /// Deepest stack use measured since boot, bytes (0 if not measured).
     pub stack_peak: u32,
+    /// Received bytes lost since boot because the board's receive queue was
+    /// full (the frame they belonged to fails its check and is answered with
+    /// an error) (since version 3).
+    pub rx_overflows: u32,
+    /// Fewest core clock cycles one tick's work took in this plan (the
+    /// planner step and its setpoint); 0 before the first step or without a
+    /// cycle counter (since version 3).
+    pub step_cycles_min: u32,
+    /// Mean cycles per tick's work in this plan (since version 3).
+    pub step_cycles_mean: u32,
+    /// Most cycles one tick's work took in this plan (since version 3).
+    pub step_cycles_max: u32,
 }
 
 /// Board to host.

@@ -312,6 +312,10 @@ fn every_reply_is_pinned() {
         rx_errors: 2,
         overruns: 0,
         stack_peak: 128,
+        rx_overflows: 5,
+        step_cycles_min: 1,
+        step_cycles_mean: 300,
+        step_cycles_max: 20_000,
     };
     check(
         &Reply::Status(status),
@@ -323,6 +327,7 @@ fn every_reply_is_pinned() {
             &[0x01],
             &MINUS_ONE,
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
+            &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
         ]),
     );
     let idle = Status {
@@ -340,6 +345,7 @@ fn every_reply_is_pinned() {
             &TWO,
             &[0x00],
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
+            &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
         ]),
     );
     for (i, s) in [State::Idle, State::Running, State::Done, State::Stopped]

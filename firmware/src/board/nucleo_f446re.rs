@@ -1,13 +1,20 @@
 //! ST Nucleo-F446RE: STM32F446RE at 180 MHz from the ST-LINK's 8 MHz clock,
-//! USART2 (PA2 TX, PA3 RX: the ST-LINK virtual COM port) for the protocol,
-//! SysTick for the loop, defmt over RTT (read by `probe-rs run`).
+//! USART2 (PA2 TX, PA3 RX: the ST-LINK virtual COM port) for the protocol
+//! (receive by interrupt), SysTick for the loop, the DWT cycle counter,
+//! defmt over RTT (read by `probe-rs run`).
+//!
+//! Clocks: `stm32f4xx-hal`'s `freeze` sets the PLL for 180 MHz from HSE
+//! bypass, turns on the regulator's over-drive (needed above 168 MHz), sets
+//! the flash to 5 wait states (`(180 MHz - 1) / 30 MHz` at 3.3 V) and turns on
+//! the ART accelerator (instruction cache, data cache, prefetch: `FLASH_ACR`
+//! `ICEN`, `DCEN`, `PRFTEN`). `log_clocks` reads `FLASH_ACR` back into the log.
 
+/// The device module RTIC needs: the PAC.
+pub use stm32f4xx_hal::pac;
 use stm32f4xx_hal::{
-    pac,
     prelude::*,
-    serial::{config::Config, Serial},
+    serial::{config::Config, Rx as HalRx, RxListen, Serial, Tx as HalTx},
 };
-use {defmt_rtt as _, panic_probe as _};
 
 use crate::tick::SysTicker;
 
@@ -21,10 +28,34 @@ pub const TICK_HZ: u32 = 100;
 /// `Run { every: 2 }` there, or setpoints are dropped (and counted).
 const BAUD: u32 = 115_200;
 
-/// Clocks, USART2 and the loop timer.
-pub fn init() -> (Serial<pac::USART2>, SysTicker) {
-    let dp = pac::Peripherals::take().unwrap();
-    let cp = cortex_m::Peripherals::take().unwrap();
+/// USART2, transmit half (polled by the main loop).
+pub type Tx = HalTx<pac::USART2>;
+/// USART2, receive half (read by its interrupt).
+pub type Rx = HalRx<pac::USART2>;
+
+/// The cycle counter: the DWT's `CYCCNT` (enabled in `init`).
+pub fn cycles() -> u32 {
+    cortex_m::peripheral::DWT::cycle_count()
+}
+
+/// What the board gives the application.
+pub struct Board {
+    /// USART2, transmit half.
+    pub tx: Tx,
+    /// USART2, receive half (its RXNE interrupt is enabled).
+    pub rx: Rx,
+    /// The loop timer.
+    pub ticker: SysTicker,
+}
+
+/// Clocks, USART2 (receive interrupt on), the DWT cycle counter, SysTick.
+pub fn init(
+    syst: cortex_m::peripheral::SYST,
+    dcb: &mut cortex_m::peripheral::DCB,
+    dwt: &mut cortex_m::peripheral::DWT,
+) -> Board {
+    // SAFETY: RTIC's init runs once, before anything else uses the peripherals.
+    let dp = unsafe { pac::Peripherals::steal() };
     let rcc = dp.RCC.constrain();
     let clocks = rcc
         .cfgr
@@ -32,14 +63,44 @@ pub fn init() -> (Serial<pac::USART2>, SysTicker) {
         .bypass_hse_oscillator()
         .sysclk(CORE_HZ.Hz())
         .freeze();
+    dcb.enable_trace();
+    dwt.enable_cycle_counter();
     let gpioa = dp.GPIOA.split();
-    let serial = dp
-        .USART2
-        .serial(
-            (gpioa.pa2, gpioa.pa3),
-            Config::default().baudrate(BAUD.bps()),
-            &clocks,
-        )
-        .unwrap();
-    (serial, SysTicker::start(cp.SYST, CORE_HZ, TICK_HZ))
+    let serial = Serial::new(
+        dp.USART2,
+        (gpioa.pa2, gpioa.pa3),
+        Config::default().baudrate(BAUD.bps()),
+        &clocks,
+    )
+    .unwrap();
+    let (tx, mut rx) = serial.split();
+    rx.listen();
+    Board {
+        tx,
+        rx,
+        ticker: SysTicker::start(syst, CORE_HZ, TICK_HZ),
+    }
+}
+
+/// Logs the clock setup as the flash controller has it.
+pub fn log_clocks() {
+    // SAFETY: a read of FLASH_ACR.
+    let acr = unsafe { (*pac::FLASH::ptr()).acr().read() };
+    defmt::info!(
+        "core clock {} Hz; flash {} wait states, ART: icache {} dcache {} prefetch {}",
+        CORE_HZ,
+        acr.latency().bits(),
+        acr.icen().bit_is_set(),
+        acr.dcen().bit_is_set(),
+        acr.prften().bit_is_set()
+    );
+}
+
+/// Stops on an unrecoverable fault: the message in the defmt log, then a
+/// breakpoint, where `probe-rs run` stops and prints the backtrace.
+pub fn fatal(message: &str) -> ! {
+    defmt::error!("{}", message);
+    loop {
+        cortex_m::asm::bkpt();
+    }
 }

@@ -1,11 +1,14 @@
 //! The whole board logic of capp-node: `serve` (commands in, replies and
 //! setpoints out, one planner step per tick) over a UART and a ticker whose
-//! values the optimiser cannot see.
+//! values the optimiser cannot see, and the boards' design: the receive
+//! interrupt's `rx::on_interrupt` and `serve_queued` fed by its queue, on a
+//! node re-initialised in place (`Node::reset`).
 #![no_std]
 #![no_main]
 
 use capp_nopanic as _;
 
+use capp_node::rx::{self, Queue, RxCounters, RXQ};
 use capp_node::{Node, Ticker};
 use core::hint::black_box;
 use embedded_hal_nb::{nb, serial};
@@ -45,5 +48,15 @@ impl Ticker for Ticks {
 pub extern "C" fn _start() -> ! {
     // The firmware's queue size (firmware/src/main.rs).
     let mut node = Node::<4096>::new();
-    capp_node::serve(&mut node, &mut Uart, &mut Ticks)
+    if black_box(true) {
+        capp_node::serve(&mut node, &mut Uart, &mut Ticks)
+    }
+    node.reset();
+    node.set_cycle_counter(|| black_box(0));
+    let mut queue = Queue::<u8, RXQ>::new();
+    let (mut producer, mut consumer) = queue.split();
+    let counters = RxCounters::new();
+    // What the receive interrupt does, then the loop that drains its queue.
+    rx::on_interrupt(&mut Uart, &mut producer, &counters);
+    capp_node::serve_queued(&mut node, &mut Uart, &mut consumer, &counters, &mut Ticks)
 }

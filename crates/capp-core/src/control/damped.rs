@@ -104,6 +104,25 @@ impl<const N: usize> Default for DampedWorkspace<N> {
     }
 }
 
+impl<const N: usize> DampedWorkspace<N> {
+    /// Every buffer to zero, in place.
+    pub fn clear(&mut self) {
+        // Every field is named: a field added here fails to compile.
+        let DampedWorkspace {
+            columns,
+            metric,
+            gradient,
+            kg,
+            factor,
+        } = self;
+        columns.fill([0.0; 6]);
+        metric.fill(0.0);
+        gradient.fill(0.0);
+        kg.fill(0.0);
+        factor.fill([0.0; 6]);
+    }
+}
+
 /// What the damped law did this step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DampedStep {
