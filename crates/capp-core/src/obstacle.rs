@@ -270,8 +270,8 @@ pub struct Obstacle {
     /// Whether `R` is the identity (no Euler angles): the rotations are skipped.
     aligned: bool,
     exponents: [Exponent; 3],
-    /// Per [`PointKind`]: `semi-axis + margin`.
-    axes: [Vec3; 2],
+    /// The influence distance the `reach` boxes were widened by.
+    influence: f32,
     /// Per [`PointKind`]: `1 / (semi-axis + margin)`.
     inv_axes: [Vec3; 2],
     /// Per [`PointKind`]: half-extents of the influence box, `semi-axis + margin + influence`.
@@ -324,8 +324,7 @@ impl Obstacle {
         let rotation = rotation_123(rx, ry, rz);
         let axes = vec3(s.semi_axes);
         let inflate = |margin: f32| axes.add_scalar(margin);
-        let inflated = margins.map(inflate);
-        let inv_axes = inflated.map(|a| a.map(|x| 1.0 / x));
+        let inv_axes = margins.map(|m| inflate(m).map(|x| 1.0 / x));
         let reach = margins.map(|m| inflate(m).add_scalar(influence));
         let reach_sq = reach.map(|r| r.dot(&r));
         Ok(Obstacle {
@@ -335,7 +334,7 @@ impl Obstacle {
             rotation_t: rotation.transpose(),
             aligned: s.euler_123 == [0.0; 3],
             exponents: s.exponents.map(Exponent::new),
-            axes: inflated,
+            influence,
             inv_axes,
             reach,
             reach_sq,
@@ -376,7 +375,6 @@ impl Obstacle {
             return None;
         }
         let inv = &self.inv_axes[k];
-        let axes = &self.axes[k];
         let mut c = 0.0;
         let mut local_gradient = Vec3::zeros();
         let mut box_sq = 0.0;
@@ -393,7 +391,8 @@ impl Obstacle {
                 0.0
             };
             local_gradient[axis] = slope * inv[axis] * sign;
-            let outside = max(x[axis].abs() - axes[axis], 0.0);
+            // semi-axis + margin = reach - influence.
+            let outside = max(x[axis].abs() - (reach[axis] - self.influence), 0.0);
             box_sq += outside * outside;
         }
         if c > C_CUTOFF || c.is_nan() {

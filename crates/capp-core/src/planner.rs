@@ -27,17 +27,15 @@
 //! halving. Nothing allocates; the planner is a fixed-size value.
 
 use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
-use crate::control::damped::{damped_rate, DampedWorkspace, Guard};
-use crate::control::{
-    descent_rate, lyapunov_terms, pose_error, weighted_rate, Drive, LawKind, PoseError, Target,
-};
-use crate::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
-use crate::math::{all_finite, dot_slice, min};
-use crate::mission::Settings;
-use crate::projection::{limit_rates, project, retreat, strength};
+use crate::control::damped::{damped_rate, Guard};
+use crate::control::first_order::first_order_rate;
+use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
+use crate::kinematics::{forward_kinematics, Frames};
+use crate::math::all_finite;
+use crate::projection::{retreat, strength};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
-use crate::step_size::{self, advancement};
+use crate::step_size::advancement;
 
 /// Fraction of `engage_clearance` (in `C - 1`) below which a step may not
 /// bring the closest pair closer: the arm stops short of resting on an
@@ -232,14 +230,9 @@ pub struct Planner<const N: usize> {
     now: Evaluation<N>,
     next: Evaluation<N>,
     q_next: [f32; N],
-    terms: [[f32; N]; 4],
-    drive: [f32; N],
     rate: [f32; N],
-    gain: [f32; N],
-    /// Weighted squared Jacobian column sizes (for the step bound).
-    columns: [f32; N],
-    locked: [bool; N],
-    damped: DampedWorkspace<N>,
+    /// The buffers of the law that runs.
+    law: LawWorkspace<N>,
     step: u32,
     phase: Phase,
     /// Position error change over the last step (the listing's `error_step`).
@@ -271,13 +264,8 @@ impl<const N: usize> Planner<N> {
             now: Evaluation::new(),
             next: Evaluation::new(),
             q_next: [0.0; N],
-            terms: [[0.0; N]; 4],
-            drive: [0.0; N],
             rate: [0.0; N],
-            gain: [0.0; N],
-            columns: [0.0; N],
-            locked: [false; N],
-            damped: DampedWorkspace::default(),
+            law: LawWorkspace::for_kind(LawKind::DampedLeastSquares),
             step: 0,
             phase: Phase::Done(Outcome::Stalled),
             error_step: 0.0,
@@ -339,6 +327,10 @@ impl<const N: usize> Planner<N> {
             return Err(StartError::OutsideLimits { joint: joint as u8 });
         }
         self.reset(start);
+        let kind = scenario.settings().law.kind;
+        if !self.law.suits(kind) {
+            self.law.reset(kind);
+        }
         // Scenario::new refuses a mission without waypoints, so this never fails.
         let Some(&target) = scenario.targets().first() else {
             return Err(StartError::ScenarioMismatch);
@@ -371,13 +363,8 @@ impl<const N: usize> Planner<N> {
             now,
             next,
             q_next,
-            terms,
-            drive,
             rate,
-            gain,
-            columns,
-            locked,
-            damped,
+            law,
             step,
             phase,
             error_step,
@@ -392,15 +379,8 @@ impl<const N: usize> Planner<N> {
         now.reset();
         next.reset();
         *q_next = *q;
-        for t in terms.iter_mut() {
-            t.fill(0.0);
-        }
-        drive.fill(0.0);
         rate.fill(0.0);
-        gain.fill(0.0);
-        columns.fill(0.0);
-        locked.fill(false);
-        damped.clear();
+        law.clear();
         *step = 0;
         *phase = if len == 0 {
             Phase::Done(Outcome::Stalled)
@@ -502,62 +482,11 @@ impl<const N: usize> Planner<N> {
         }
     }
 
-    /// The first-order laws (gradient, eq. 15): rate from eqs. 13-18, the
-    /// Euclidean one-sided projection (eq. 24), the rate limits, and the
-    /// listing's step with its descent and stiffness bounds. Returns the
-    /// drive, whether the projection constrained it, and the step `h`.
-    fn first_order(
-        &mut self,
-        robot: &Robot<N>,
-        settings: &Settings,
-        engage: f32,
-    ) -> (Drive, bool, f32) {
-        let n = self.n.min(N);
-        lyapunov_terms(robot, &self.now.frames, &self.now.error, &mut self.terms);
-        let drive = weighted_rate(
-            robot,
-            &self.q[..n],
-            &self.now.error,
-            &self.terms,
-            &settings.law,
-            &mut self.drive,
-            &mut self.rate,
-            &mut self.gain,
-        );
-        let constrained = project(
-            robot,
-            &self.q[..n],
-            &self.now.mu[..n],
-            engage,
-            &mut self.rate[..n],
-            &mut self.locked[..n],
-        );
-        limit_rates(robot, &mut self.rate[..n]);
-        if !all_finite(&self.rate[..n]) {
-            self.rate[..n].fill(0.0);
-        }
-        let mut h = step_size::listing(settings, &self.now.error, self.error_step);
-        let descent = descent_rate(&self.terms, &settings.law, &self.rate[..n]);
-        if descent > 0.0 {
-            let twist = end_twist(robot, &self.now.frames, &self.rate[..n]);
-            h = min(
-                h,
-                step_size::descent_bound(descent, twist, settings.law.orientation_scale),
-            );
-        }
-        column_sizes(
-            robot,
-            &self.now.frames,
-            settings.law.orientation_scale,
-            &mut self.columns[..n],
-        );
-        let stiffness = dot_slice(&self.gain[..n], &self.columns[..n]);
-        h = min(h, step_size::stiffness_bound(stiffness));
-        (drive, constrained, h)
-    }
-
     /// Takes one planning step. Returns the report; a finished planner returns
     /// its final report again without moving.
+    // Not inlined: callers such as the board's serving loop reach it from
+    // several places, and one copy of the step is 4 KiB of flash.
+    #[inline(never)]
     pub fn step<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
@@ -591,9 +520,25 @@ impl<const N: usize> Planner<N> {
             self.now.field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
         );
-        let (drive, constrained, mut h) = match settings.law.kind {
-            LawKind::Gradient | LawKind::Paper => self.first_order(robot, &settings, engage),
-            LawKind::DampedLeastSquares => {
+        if !self.law.suits(settings.law.kind) {
+            // Another scenario's law than the last step's (a bench, a caller
+            // switching): fresh buffers for it.
+            self.law.reset(settings.law.kind);
+        }
+        let (drive, constrained, mut h) = match &mut self.law {
+            LawWorkspace::FirstOrder(ws) => first_order_rate(
+                robot,
+                &self.now.frames,
+                &self.q[..n],
+                &self.now.error,
+                &self.now.mu[..n],
+                engage,
+                &settings,
+                self.error_step,
+                ws,
+                &mut self.rate[..n],
+            ),
+            LawWorkspace::Damped(ws) => {
                 let guard = Guard {
                     gradient: &self.now.mu[..n],
                     strength: engage,
@@ -610,7 +555,7 @@ impl<const N: usize> Planner<N> {
                     &guard,
                     &settings.law,
                     settings.time_step_s,
-                    &mut self.damped,
+                    ws,
                     &mut self.rate[..n],
                 );
                 (step.drive, step.constrained, settings.time_step_s)

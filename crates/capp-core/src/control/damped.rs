@@ -84,10 +84,6 @@ pub struct DampedWorkspace<const N: usize> {
     columns: [Vec6; N],
     /// The metric `M_jj`, joint units squared per second squared.
     metric: [f32; N],
-    /// `G = -dV/dq` (eq. 13).
-    gradient: [f32; N],
-    /// `K g` of the guard's gradient.
-    kg: [f32; N],
     /// `L D L^T` factor of `J M J^T + mu Lambda^-1`.
     factor: Sym6,
 }
@@ -97,8 +93,6 @@ impl<const N: usize> Default for DampedWorkspace<N> {
         DampedWorkspace {
             columns: [[0.0; 6]; N],
             metric: [0.0; N],
-            gradient: [0.0; N],
-            kg: [0.0; N],
             factor: [[0.0; 6]; 6],
         }
     }
@@ -111,14 +105,10 @@ impl<const N: usize> DampedWorkspace<N> {
         let DampedWorkspace {
             columns,
             metric,
-            gradient,
-            kg,
             factor,
         } = self;
         columns.fill([0.0; 6]);
         metric.fill(0.0);
-        gradient.fill(0.0);
-        kg.fill(0.0);
         factor.fill([0.0; 6]);
     }
 }
@@ -147,15 +137,14 @@ pub struct Guard<'a> {
     pub retreat: f32,
 }
 
-/// `K g = M g - M J^T (J M J^T + mu Lambda^-1)^-1 J M g` into `out`; returns
-/// `g . K g`.
+/// For `K g = M g - M J^T t`, `t = (J M J^T + mu Lambda^-1)^-1 J M g`: returns
+/// `(g . K g, t)`; `K g` itself is then one O(n) pass ([`apply_metric`]).
 fn metric_of<const N: usize>(
     g: &[f32],
     columns: &[Vec6; N],
     metric: &[f32; N],
     factor: &Sym6,
-    out: &mut [f32; N],
-) -> f32 {
+) -> (f32, Vec6) {
     let mut t = [0.0f32; 6];
     for ((column, &m), &gj) in columns.iter().zip(metric).zip(g) {
         let u = m * gj;
@@ -165,11 +154,24 @@ fn metric_of<const N: usize>(
     }
     solve(factor, &mut t);
     let mut along = 0.0f32;
-    for (((o, column), &m), &gj) in out.iter_mut().zip(columns).zip(metric).zip(g) {
-        *o = m * gj - m * dot6(column, &t);
-        along += gj * *o;
+    for ((column, &m), &gj) in columns.iter().zip(metric).zip(g) {
+        along += gj * (m * gj - m * dot6(column, &t));
     }
-    along
+    (along, t)
+}
+
+/// `rate -= k K g`, with `t` from [`metric_of`].
+fn apply_metric<const N: usize>(
+    rate: &mut [f32],
+    k: f32,
+    g: &[f32],
+    t: &Vec6,
+    columns: &[Vec6; N],
+    metric: &[f32; N],
+) {
+    for (((r, column), &m), &gj) in rate.iter_mut().zip(columns).zip(metric).zip(g) {
+        *r -= k * (m * gj - m * dot6(column, t));
+    }
 }
 
 /// Projects `rate` (the step `dq*`) against `guard` in the metric `K`: the
@@ -188,20 +190,12 @@ fn project_guard<const N: usize>(
     if !(approach > allowed && approach.is_finite() && allowed.is_finite()) {
         return false;
     }
-    let along = metric_of(
-        guard.gradient,
-        &ws.columns,
-        &ws.metric,
-        &ws.factor,
-        &mut ws.kg,
-    );
+    let (along, t) = metric_of(guard.gradient, &ws.columns, &ws.metric, &ws.factor);
     if !(along > 0.0 && along.is_finite()) {
         return false;
     }
     let k = (approach - allowed) / along;
-    for (r, kg) in rate.iter_mut().zip(&ws.kg) {
-        *r -= k * kg;
-    }
+    apply_metric(rate, k, guard.gradient, &t, &ws.columns, &ws.metric);
     true
 }
 
@@ -303,13 +297,12 @@ pub fn damped_rate<const N: usize>(
     let p = frames.end_position();
     let mut a: Sym6 = [[0.0; 6]; 6];
     let mut trace = 0.0f32;
-    for (j, ((((joint, &qj), column), m), g)) in robot
+    for (j, (((joint, &qj), column), m)) in robot
         .joints()
         .iter()
         .zip(q)
         .zip(ws.columns.iter_mut())
         .zip(ws.metric.iter_mut())
-        .zip(ws.gradient.iter_mut())
         .enumerate()
     {
         let z = frames.axis(j);
@@ -322,8 +315,8 @@ pub fn damped_rate<const N: usize>(
             JointKind::Revolute => six(z.cross(&(p - frames.pivot(j))), angular),
             JointKind::Prismatic => six(z, Vec3::zeros()),
         };
-        *g = dot6(column, &weighted);
-        *m = joint.max_rate * joint_weight(joint, qj, *g);
+        // G_j = J_j . Lambda eps (eq. 13), whose sign is eq. 18's eta.
+        *m = joint.max_rate * joint_weight(joint, qj, dot6(column, &weighted));
         for r in 0..6 {
             let mc = *m * column[r];
             for c in 0..=r {
@@ -359,14 +352,9 @@ pub fn damped_rate<const N: usize>(
     let mut y = eps;
     solve(&ws.factor, &mut y);
     let mut descent = 0.0f32;
-    for (((r, column), &m), &g) in rate
-        .iter_mut()
-        .zip(&ws.columns)
-        .zip(&ws.metric)
-        .zip(&ws.gradient)
-    {
+    for ((r, column), &m) in rate.iter_mut().zip(&ws.columns).zip(&ws.metric) {
         *r = m * dot6(column, &y);
-        descent += g * *r;
+        descent += dot6(column, &weighted) * *r;
     }
     if (descent <= 0.0 || descent.is_nan()) && error.has_orientation {
         let mut y = six(error.e[3], sigma_half);

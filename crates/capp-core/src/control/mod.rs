@@ -47,6 +47,7 @@
 //! may move at up to `2 k_i <= qdot_max_i`.
 
 pub mod damped;
+pub mod first_order;
 
 use crate::kinematics::{end_direction_error, end_point_force, Frames};
 use crate::math::{dot_slice, max, min, norm_slice, Mat3, Vec3};
@@ -146,6 +147,52 @@ impl Default for LawSettings {
             approach_radius: 2.0,
             damping: 1.0e-3,
         }
+    }
+}
+
+/// The buffers of whichever law runs: the laws never run in the same step,
+/// so they share the room (the larger workspace's size, not the sum).
+#[derive(Clone, Debug)]
+pub enum LawWorkspace<const N: usize> {
+    /// [`LawKind::Gradient`] and [`LawKind::Paper`].
+    FirstOrder(first_order::FirstOrderWorkspace<N>),
+    /// [`LawKind::DampedLeastSquares`].
+    Damped(damped::DampedWorkspace<N>),
+}
+
+impl<const N: usize> LawWorkspace<N> {
+    /// Fresh buffers for `kind`.
+    pub fn for_kind(kind: LawKind) -> Self {
+        match kind {
+            LawKind::Gradient | LawKind::Paper => {
+                LawWorkspace::FirstOrder(first_order::FirstOrderWorkspace::default())
+            }
+            LawKind::DampedLeastSquares => LawWorkspace::Damped(damped::DampedWorkspace::default()),
+        }
+    }
+
+    /// Fresh buffers for `kind`, in place.
+    pub fn reset(&mut self, kind: LawKind) {
+        *self = Self::for_kind(kind);
+    }
+
+    /// Every buffer to zero, in place (the same law's).
+    pub fn clear(&mut self) {
+        match self {
+            LawWorkspace::FirstOrder(ws) => ws.clear(),
+            LawWorkspace::Damped(ws) => ws.clear(),
+        }
+    }
+
+    /// Whether these are the buffers `kind` uses.
+    pub fn suits(&self, kind: LawKind) -> bool {
+        matches!(
+            (self, kind),
+            (
+                LawWorkspace::FirstOrder(_),
+                LawKind::Gradient | LawKind::Paper
+            ) | (LawWorkspace::Damped(_), LawKind::DampedLeastSquares)
+        )
     }
 }
 
