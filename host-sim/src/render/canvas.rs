@@ -367,9 +367,8 @@ impl Pixmap {
         }
         let a = alpha.min(1.0);
         let i = (y as usize * self.width + x as usize) * 3;
-        for k in 0..3 {
-            let old = self.rgb[i + k] as f64;
-            self.rgb[i + k] = (old + (color[k] as f64 - old) * a).round() as u8;
+        for (old, new) in self.rgb[i..i + 3].iter_mut().zip(color) {
+            *old = (*old as f64 + (new as f64 - *old as f64) * a).round() as u8;
         }
     }
 
@@ -523,8 +522,8 @@ impl Pixmap {
                     }
                 }
             }
-            for x in lo..hi {
-                self.blend(x as i64, y, color, opacity * row[x].min(1.0), clip);
+            for (x, c) in row.iter().enumerate().take(hi).skip(lo) {
+                self.blend(x as i64, y, color, opacity * c.min(1.0), clip);
             }
         }
     }

@@ -32,7 +32,7 @@ static VIEWER_JS: &str = include_str!("../../assets/viewer.js");
 /// A JSON number, or `null` for a missing or non-finite value.
 fn num(v: Option<f64>, out: &mut String) {
     match v.filter(|v| v.is_finite()) {
-        Some(v) if v == 0.0 => out.push('0'),
+        Some(0.0) => out.push('0'),
         Some(v) if (1e-3..1e6).contains(&v.abs()) => {
             let _ = write!(out, "{}", (v * 1e4).round() / 1e4);
         }
