@@ -272,10 +272,15 @@ impl Axes {
 
     /// A legend box in the top right corner of the plotting box.
     pub fn legend(&self, canvas: &mut Canvas, items: &[(String, Rgb, Marker)]) {
+        self.legend_in(canvas, items, false);
+    }
+
+    /// A legend box in the top left (`left`) or top right corner.
+    pub fn legend_in(&self, canvas: &mut Canvas, items: &[(String, Rgb, Marker)], left: bool) {
         if items.is_empty() {
             return;
         }
-        let (_, y0, x1, _) = self.rect;
+        let (x0, y0, x1, _) = self.rect;
         let size = 11.0;
         let w = items
             .iter()
@@ -283,7 +288,7 @@ impl Axes {
             .fold(0.0, f64::max)
             + 40.0;
         let h = 8.0 + 16.0 * items.len() as f64;
-        let (bx, by) = (x1 - w - 8.0, y0 + 8.0);
+        let (bx, by) = (if left { x0 + 8.0 } else { x1 - w - 8.0 }, y0 + 8.0);
         let rect = vec![(bx, by), (bx + w, by), (bx + w, by + h), (bx, by + h)];
         canvas.push(Shape::Polygon {
             points: rect.clone(),
