@@ -206,11 +206,17 @@
     if (e.key === 'ArrowLeft') { setPlaying(false); show(Math.max(frame - 1, 0)); }
     if (e.key === 'h') home();
   });
-  window.addEventListener('resize', () => {
-    camera.aspect = view.clientWidth / view.clientHeight;
+  // Centre the scene in the space right of the panel on wide windows.
+  function fit() {
+    const w = view.clientWidth, h = view.clientHeight;
+    const shift = w > 800 ? ($('hud').offsetWidth + 12) / 2 : 0;
+    camera.aspect = w / h;
+    camera.setViewOffset(w, h, -shift, 0, w, h);
     camera.updateProjectionMatrix();
-    renderer.setSize(view.clientWidth, view.clientHeight);
-  });
+    renderer.setSize(w, h);
+  }
+  fit();
+  window.addEventListener('resize', fit);
   function loop(now) {
     requestAnimationFrame(loop);
     // About 30 frames a second; a second's pause on the last frame.
@@ -221,7 +227,10 @@
     controls.update();
     renderer.render(scene, camera);
   }
-  show(0);
+  // viewer.html#frame=N opens paused at frame N.
+  const asked = /frame=(\d+)/.exec(window.location.hash);
+  if (asked) setPlaying(false);
+  show(asked ? Math.min(+asked[1], RUN.frames - 1) : 0);
   renderer.render(scene, camera);
   const gl = renderer.getContext();
   if (!gl || gl.isContextLost()) {

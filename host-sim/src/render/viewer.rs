@@ -222,7 +222,7 @@ td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: ta
 <div id="controls"><button id="play">pause</button><input id="seek" type="range" min="0" value="0"></div>
 <table id="now"></table>
 <div id="legend"></div>
-<div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view</div>
+<div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view &middot; viewer.html#frame=N opens at frame N</div>
 </div>
 <script>
 {three}
