@@ -79,7 +79,7 @@ enum Command {
         #[arg(long, default_value_t = 20.0)]
         idle_timeout: f64,
     },
-    /// Draw the pictures of an output folder (SVG, PNG, HTML animation).
+    /// Draw the pictures of an output folder (SVG and PNG views and plots, 3-D viewer.html, motion.gif).
     Render {
         /// Output folder of `capp run`.
         dir: PathBuf,

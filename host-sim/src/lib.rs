@@ -16,7 +16,7 @@
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
 //! | [`trajectory`] | reading a trajectory CSV back |
 //! | [`check`] | the independent f64 checker (own kinematics, own super-ellipsoids) |
-//! | [`render`] | SVG/PNG pictures and the HTML animation |
+//! | [`render`] | SVG/PNG pictures with text, the 3-D `viewer.html`, `motion.gif`, report charts |
 //! | [`serial`] | `capp serial`: upload to a board, receive its stream, account for every setpoint |
 //! | [`cli`] | the `capp` command line |
 //!

@@ -1,21 +1,55 @@
-//! The rendered files exist, are valid SVG / PNG / HTML, and are not blank.
+//! The rendered files exist, are valid SVG / PNG / GIF / HTML, are not
+//! blank, and the PNGs carry their text.
 
 use std::path::Path;
 
 use capp_sim::output::rows_csv;
-use capp_sim::{plan, render, trajectory, Problem};
+use capp_sim::render::{self, plots, views, Canvas, Shape};
+use capp_sim::trajectory::Trajectory;
+use capp_sim::{plan, trajectory, Problem};
 
-#[test]
-fn rendered_files_are_valid_and_not_blank() {
+fn payload_bay() -> (Problem, Trajectory) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_payload_bay.toml");
     let problem = Problem::load(&path).unwrap();
     let scenario = problem.validate().unwrap();
     let result = plan::run(&problem, &scenario, |_| {}).unwrap();
     let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
     let t = trajectory::parse(&text, Path::new("trajectory.csv")).unwrap();
+    (problem, t)
+}
+
+/// Width, height and RGB pixels of a PNG file.
+fn decode_png(path: &Path) -> (u32, u32, Vec<u8>) {
+    let file = std::fs::File::open(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+/// Pixels darker than the page in rows `y0..y1`.
+fn inked_rows(width: u32, pixels: &[u8], y0: usize, y1: usize) -> usize {
+    let w = width as usize * 3;
+    pixels[y0 * w..y1 * w]
+        .chunks(3)
+        .filter(|p| p.iter().any(|&c| c < 160))
+        .count()
+}
+
+#[test]
+fn rendered_files_are_valid_and_not_blank() {
+    let (problem, t) = payload_bay();
     let dir = tempfile::tempdir().unwrap();
     let files = render::render(&problem, &t, dir.path()).unwrap();
-    assert_eq!(files.len(), 5);
+    let names: Vec<String> = files
+        .iter()
+        .map(|f| f.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, render::FILES);
 
     for name in ["arm.svg", "plots.svg"] {
         let svg = std::fs::read_to_string(dir.path().join(name)).unwrap();
@@ -28,24 +62,30 @@ fn rendered_files_are_valid_and_not_blank() {
         assert!(!svg.contains("NaN"), "{name}");
         assert!(svg.contains("<text"), "{name} carries text");
     }
-    assert!(std::fs::read_to_string(dir.path().join("arm.svg"))
-        .unwrap()
-        .contains("<polygon"));
+    let arm = std::fs::read_to_string(dir.path().join("arm.svg")).unwrap();
+    assert!(arm.contains("<polygon"));
+    for label in ["payload", "bay floor", "aft bulkhead", "x [in]", "z [in]"] {
+        assert!(
+            arm.contains(&format!(">{label}</text>")),
+            "arm.svg: {label}"
+        );
+    }
+    let plots = std::fs::read_to_string(dir.path().join("plots.svg")).unwrap();
+    for label in ["V [in²]", "step", "orientation", "C − 1"] {
+        assert!(
+            plots.contains(&format!(">{label}</text>")),
+            "plots.svg: {label}"
+        );
+    }
 
     for name in ["arm.png", "plots.png"] {
-        let file = std::fs::File::open(dir.path().join(name)).unwrap();
-        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-            .read_info()
-            .unwrap();
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert!(info.width >= 400 && info.height >= 300, "{name}");
-        let pixels = &buf[..info.buffer_size()];
+        let (width, height, pixels) = decode_png(&dir.path().join(name));
+        assert!(width >= 400 && height >= 300, "{name}");
         let inked = pixels
             .chunks(3)
             .filter(|p| p.iter().any(|&c| c < 200))
             .count();
-        let total = (info.width * info.height) as usize;
+        let total = (width * height) as usize;
         assert!(
             inked * 500 > total,
             "{name}: only {inked} of {total} pixels drawn"
@@ -55,10 +95,83 @@ fn rendered_files_are_valid_and_not_blank() {
         colours.sort();
         colours.dedup();
         assert!(colours.len() > 4, "{name}");
+        // The title band (above every panel) holds only text: it is inked.
+        let title = inked_rows(width, &pixels, 8, 32);
+        assert!(title > 300, "{name}: {title} pixels of title");
     }
 
     let html = std::fs::read_to_string(dir.path().join("animation.html")).unwrap();
     assert!(html.starts_with("<!DOCTYPE html>"));
     assert!(html.contains("const frames = [[\""));
     assert!(html.contains("id=\"arm2\""));
+
+    let viewer = std::fs::read_to_string(dir.path().join("viewer.html")).unwrap();
+    assert!(viewer.starts_with("<!DOCTYPE html>"));
+    assert!(viewer.contains("var THREE="), "three.js inlined");
+    assert!(viewer.contains("const RUN = {"));
+    assert!(viewer.contains("\"name\": \"payload\""));
+    // Self-contained: nothing is loaded from elsewhere.
+    assert!(!viewer.contains("<script src") && !viewer.contains("<link"));
+    let run = viewer.split("const RUN = ").nth(1).unwrap();
+    let run = run.split("</script>").next().unwrap();
+    assert!(!run.contains("NaN") && !run.contains("inf"));
+
+    let file = std::fs::File::open(dir.path().join("motion.gif")).unwrap();
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options.read_info(std::io::BufReader::new(file)).unwrap();
+    let (w, h) = (decoder.width(), decoder.height());
+    assert!(w >= 400 && h >= 300);
+    let mut frames = 0;
+    let mut first_inked = 0;
+    while let Some(frame) = decoder.read_next_frame().unwrap() {
+        if frames == 0 {
+            assert_eq!((frame.width, frame.height), (w, h), "first frame is whole");
+            first_inked = frame
+                .buffer
+                .chunks(4)
+                .filter(|p| p[..3].iter().any(|&c| c < 160))
+                .count();
+        }
+        frames += 1;
+    }
+    assert!(frames >= 20, "{frames} frames");
+    assert!(
+        first_inked * 100 > (w as usize * h as usize),
+        "{first_inked}"
+    );
+}
+
+/// The text is painted: removing it changes the title band, which is
+/// otherwise empty.
+#[test]
+fn pngs_have_text() {
+    let (problem, t) = payload_bay();
+    let without_text = |c: &Canvas| Canvas {
+        shapes: c
+            .shapes
+            .iter()
+            .filter(|s| !matches!(s, Shape::Text { .. }))
+            .cloned()
+            .collect(),
+        ..c.clone()
+    };
+    for (name, canvas) in [
+        ("arm", views::arm_scene(&problem, &t, 360.0, 6).canvas),
+        ("plots", plots::plots(&problem, &t)),
+    ] {
+        let with = canvas.raster();
+        let without = without_text(&canvas).raster();
+        let band = inked_rows(canvas.width, &with, 8, 32);
+        assert!(band > 300, "{name}: {band}");
+        assert_eq!(inked_rows(canvas.width, &without, 8, 32), 0, "{name}");
+        let changed = with
+            .chunks(3)
+            .zip(without.chunks(3))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(changed > 3000, "{name}: text changed {changed} pixels");
+        // The same bytes every time: no system font, no clock.
+        assert_eq!(canvas.png().unwrap(), canvas.png().unwrap());
+    }
 }

@@ -1,205 +1,119 @@
 //! The scaling plot: per-step cost against joints, one line per obstacle
 //! count; left the M4F instruction counts, right the host medians. Drawn with
-//! the simulator's canvas (SVG with titles; PNG with the numbers drawn as
-//! seven-segment digits, since its rasteriser has no fonts).
+//! the simulator's labelled charts (the SVG and the PNG carry the same text,
+//! in the font the simulator ships).
 
+use capp_sim::render::chart::{Axes, Marker, Scale, PALETTE};
 use capp_sim::render::{Canvas, Shape};
 
 use crate::m4f::Counts;
 use crate::report::{Host, SCALING_JOINTS, SCALING_OBSTACLES};
 
-const COLORS: [[u8; 3]; 5] = [
-    [0x1f, 0x77, 0xb4],
-    [0xff, 0x7f, 0x0e],
-    [0x2c, 0xa0, 0x2c],
-    [0xd6, 0x27, 0x28],
-    [0x94, 0x67, 0xbd],
-];
-const BLACK: [u8; 3] = [0, 0, 0];
-const GREY: [u8; 3] = [0xcc, 0xcc, 0xcc];
-
-/// Segments a-g of each digit, as bits 0-6.
-const DIGITS: [u8; 10] = [
-    0b011_1111, 0b000_0110, 0b101_1011, 0b100_1111, 0b110_0110, 0b110_1101, 0b111_1101, 0b000_0111,
-    0b111_1111, 0b110_1111,
-];
-
-fn line(shapes: &mut Vec<Shape>, points: Vec<(f64, f64)>, color: [u8; 3], width: f64) {
-    shapes.push(Shape::Line {
-        points,
-        color,
-        width,
-        clip: None,
-    });
-}
-
-/// `text` (digits only) in seven segments, height `h`, left end at `(x, y)` (baseline).
-fn digits(shapes: &mut Vec<Shape>, x: f64, y: f64, h: f64, text: &str) {
-    let w = h * 0.5;
-    let mut left = x;
-    for ch in text.chars() {
-        if let Some(d) = ch.to_digit(10) {
-            let bits = DIGITS[d as usize];
-            let (top, mid, bottom) = (y - h, y - h / 2.0, y);
-            let segs = [
-                ((left, top), (left + w, top)),
-                ((left + w, top), (left + w, mid)),
-                ((left + w, mid), (left + w, bottom)),
-                ((left, bottom), (left + w, bottom)),
-                ((left, mid), (left, bottom)),
-                ((left, top), (left, mid)),
-                ((left, mid), (left + w, mid)),
-            ];
-            for (i, (a, b)) in segs.iter().enumerate() {
-                if bits & (1 << i) != 0 {
-                    line(shapes, vec![*a, *b], BLACK, 1.2);
-                }
-            }
-        }
-        left += w + h * 0.3;
-    }
-}
-
-/// A "nice" upper bound and tick step for `max`.
-fn axis(max: f64) -> (f64, f64) {
-    let raw = (max / 5.0).max(1e-9);
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0]
-        .iter()
-        .map(|k| k * mag)
-        .find(|s| *s >= raw)
-        .unwrap_or(10.0 * mag);
-    ((max / step).ceil() * step, step)
-}
-
-/// One panel: `series[i]` = points `(joints, value)` for obstacle count `i`.
+/// One panel: `series[i]` = points `(joints, value)` for obstacle count
+/// `SCALING_OBSTACLES[i]`.
 fn panel(
-    shapes: &mut Vec<Shape>,
-    origin: (f64, f64),
-    size: (f64, f64),
+    canvas: &mut Canvas,
+    rect: (f64, f64, f64, f64),
     title: &str,
+    y_label: &str,
     series: &[Vec<(f64, f64)>],
 ) {
-    let (x0, y0) = origin;
-    let (w, h) = size;
     let max_y = series.iter().flatten().map(|p| p.1).fold(0.0, f64::max);
-    let (top, step) = axis(max_y);
-    let (n_min, n_max) = (0.0, 32.0);
-    let px = |n: f64| x0 + (n - n_min) / (n_max - n_min) * w;
-    let py = |v: f64| y0 + h - v / top * h;
-    // Grid, axes, ticks.
-    let mut v = 0.0;
-    while v <= top + step * 0.5 {
-        line(shapes, vec![(px(0.0), py(v)), (px(32.0), py(v))], GREY, 0.6);
-        digits(
-            shapes,
-            x0 - 10.0 - 8.0 * format!("{v:.0}").len() as f64,
-            py(v) + 5.0,
-            10.0,
-            &format!("{v:.0}"),
-        );
-        v += step;
-    }
-    for n in SCALING_JOINTS {
-        line(
-            shapes,
-            vec![(px(n as f64), y0 + h), (px(n as f64), y0 + h + 5.0)],
-            BLACK,
-            1.0,
-        );
-        digits(
-            shapes,
-            px(n as f64) - 6.0,
-            y0 + h + 20.0,
-            10.0,
-            &n.to_string(),
-        );
-    }
-    line(
-        shapes,
-        vec![(x0, y0), (x0, y0 + h), (x0 + w, y0 + h)],
-        BLACK,
-        1.2,
+    let mut axes = Axes::new(
+        rect,
+        Scale {
+            lo: 4.0,
+            hi: 34.0,
+            log: false,
+        },
+        Scale::linear(0.0, max_y.max(1.0)),
     );
+    axes.x_ticks = SCALING_JOINTS
+        .iter()
+        .map(|&n| (n as f64, n.to_string()))
+        .collect();
+    axes.draw(canvas, title, "joints", y_label);
+    let mut items = Vec::new();
     for (i, points) in series.iter().enumerate() {
-        let color = COLORS[i % COLORS.len()];
-        let pts: Vec<(f64, f64)> = points.iter().map(|&(n, v)| (px(n), py(v))).collect();
+        let color = PALETTE[i % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = points.iter().filter_map(|&(n, v)| axes.map(n, v)).collect();
         for p in &pts {
-            shapes.push(Shape::Disc {
+            canvas.push(Shape::Disc {
                 centre: *p,
                 radius: 3.0,
                 color,
             });
         }
-        line(shapes, pts, color, 2.0);
+        canvas.push(Shape::line(pts, color, 2.0));
+        let m = SCALING_OBSTACLES.get(i).copied().unwrap_or(0);
+        items.push((format!("{m} obstacles"), color, Marker::Line));
     }
-    shapes.push(Shape::Text {
-        at: (x0, y0 - 12.0),
-        size: 14.0,
-        text: title.into(),
-    });
-    shapes.push(Shape::Text {
-        at: (x0 + w / 2.0 - 20.0, y0 + h + 38.0),
-        size: 12.0,
-        text: "joints".into(),
-    });
+    axes.legend_in(canvas, &items, true);
 }
 
-/// The two panels and the legend (obstacle counts).
+/// The two panels.
 pub fn scaling(host: &Host, counts: &Counts) -> Canvas {
-    let mut shapes = Vec::new();
-    let m4f: Vec<Vec<(f64, f64)>> = SCALING_OBSTACLES
-        .iter()
-        .map(|&m| {
-            SCALING_JOINTS
-                .iter()
-                .filter_map(|&n| Some((n as f64, counts.get("chain", n, m, "step")? / 1000.0)))
-                .collect()
-        })
-        .collect();
-    let host_us: Vec<Vec<(f64, f64)>> = SCALING_OBSTACLES
-        .iter()
-        .map(|&m| {
-            SCALING_JOINTS
-                .iter()
-                .filter_map(|&n| Some((n as f64, host.scaling(n, m)? / 1000.0)))
-                .collect()
-        })
-        .collect();
+    let series = |value: &dyn Fn(usize, usize) -> Option<f64>| -> Vec<Vec<(f64, f64)>> {
+        SCALING_OBSTACLES
+            .iter()
+            .map(|&m| {
+                SCALING_JOINTS
+                    .iter()
+                    .filter_map(|&n| Some((n as f64, value(n, m)?)))
+                    .collect()
+            })
+            .collect()
+    };
+    let m4f = series(&|n, m| Some(counts.get("chain", n, m, "step")? / 1000.0));
+    let host_us = series(&|n, m| Some(host.scaling(n, m)? / 1000.0));
+    let mut canvas = Canvas::new(1000, 440);
+    canvas.push(Shape::text(
+        (80.0, 24.0),
+        16.0,
+        "One planner step against chain length and obstacle count",
+    ));
     panel(
-        &mut shapes,
-        (80.0, 50.0),
-        (360.0, 300.0),
-        "Cortex-M4F: thousand instructions per step",
+        &mut canvas,
+        (80.0, 86.0, 470.0, 376.0),
+        "Cortex-M4F (QEMU instruction count)",
+        "thousand instructions per step",
         &m4f,
     );
     panel(
-        &mut shapes,
-        (560.0, 50.0),
-        (360.0, 300.0),
-        "host: microseconds per step (median)",
+        &mut canvas,
+        (580.0, 86.0, 970.0, 376.0),
+        "host (criterion median)",
+        "microseconds per step",
         &host_us,
     );
-    // Legend: one coloured line and the obstacle count.
-    for (i, m) in SCALING_OBSTACLES.iter().enumerate() {
-        let x = 960.0;
-        let y = 70.0 + 28.0 * i as f64;
-        line(
-            &mut shapes,
-            vec![(x, y), (x + 24.0, y)],
-            COLORS[i % COLORS.len()],
-            3.0,
-        );
-        digits(&mut shapes, x + 32.0, y + 6.0, 12.0, &m.to_string());
-    }
-    shapes.push(Shape::Text {
-        at: (960.0, 50.0),
-        size: 12.0,
-        text: "obstacles".into(),
-    });
-    Canvas {
-        width: 1040,
-        height: 420,
-        shapes,
+    canvas
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scaling_plot_is_labelled() {
+        let mut m4f = String::new();
+        let mut host = String::new();
+        for n in SCALING_JOINTS {
+            for m in SCALING_OBSTACLES {
+                m4f.push_str(&format!(
+                    "M4F chain {n} {m} step {}\n",
+                    2000 + 700 * n + 40 * n * m
+                ));
+                host.push_str(&format!("HOST {n} {m} {}\n", 300 + 50 * n + 9 * n * m));
+            }
+        }
+        m4f.push_str("step_count: done\n");
+        let counts = Counts::parse(&m4f).unwrap();
+        let mut h = Host::default();
+        h.add_scaling(&host).unwrap();
+        let svg = scaling(&h, &counts).svg();
+        for label in ["joints", "64 obstacles", "microseconds per step", "32"] {
+            assert!(svg.contains(&format!(">{label}</text>")), "{label}");
+        }
+        assert_eq!(svg.matches("<circle").count(), 2 * 25);
     }
 }

@@ -1,0 +1,266 @@
+//! `viewer.html`: the run as a 3-D scene to turn, zoom and play, in one
+//! self-contained file (works offline, from `file://`).
+//!
+//! The page inlines three things: three.js (`assets/three.min.js`, the parts
+//! listed in `assets/three-entry.js`, MIT licence in `assets/LICENSE-three.txt`;
+//! `assets/build-three.sh` rebuilds it from npm), the run's data as one JSON
+//! object `RUN` written here, and the page's own code (`assets/viewer.js`).
+//!
+//! `RUN` holds, for each of up to [`FRAMES`] rows (picked by
+//! [`super::views::frames`]): step, plan time, `V`, errors, clearance, the
+//! frame origins `o_0..o_n` and the end effector's axes; the end-effector
+//! path; the waypoints (with their orientation when they have one); and each
+//! obstacle's surface as a `(lat + 1) x lon` grid of world points.
+
+use std::fmt::Write as _;
+
+use super::canvas::escape;
+use super::chart::nice_step;
+use super::views::{bounds, frames, origins, surface};
+use crate::check::forward;
+use crate::problem::Problem;
+use crate::trajectory::Trajectory;
+
+/// Most frames in a page.
+pub const FRAMES: usize = 400;
+const LAT: usize = 32;
+const LON: usize = 64;
+
+static THREE_JS: &str = include_str!("../../assets/three.min.js");
+static VIEWER_JS: &str = include_str!("../../assets/viewer.js");
+
+/// A JSON number, or `null` for a missing or non-finite value.
+fn num(v: Option<f64>, out: &mut String) {
+    match v.filter(|v| v.is_finite()) {
+        Some(0.0) => out.push('0'),
+        Some(v) if (1e-3..1e6).contains(&v.abs()) => {
+            let _ = write!(out, "{}", (v * 1e4).round() / 1e4);
+        }
+        Some(v) => {
+            let _ = write!(out, "{v:.4e}");
+        }
+        None => out.push_str("null"),
+    }
+}
+
+fn list(values: impl IntoIterator<Item = Option<f64>>) -> String {
+    let mut s = String::from("[");
+    for (i, v) in values.into_iter().enumerate() {
+        if i > 0 {
+            s.push(',');
+        }
+        num(v, &mut s);
+    }
+    s.push(']');
+    s
+}
+
+fn string(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '<' => out.push_str("\\u003c"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(out, "\\u{:04x}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The `RUN` object.
+pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
+    let origins = origins(problem, t);
+    let (centre, side) = bounds(problem, &origins);
+    let picks = frames(&origins, FRAMES);
+    let mut time = Vec::with_capacity(t.rows.len());
+    let mut clock = 0.0;
+    for r in &t.rows {
+        clock += r.h;
+        time.push(clock);
+    }
+    let joints = origins.first().map_or(0, Vec::len);
+    let rows = |f: &dyn Fn(usize) -> Option<f64>| list(picks.iter().map(|&k| f(k)));
+    let mut s = String::from("{\n");
+    let _ = writeln!(s, "\"name\": {},", string(&problem.name));
+    let _ = writeln!(s, "\"unit\": {},", string(&problem.length_unit));
+    let _ = writeln!(s, "\"steps\": {},", t.rows.last().map_or(0, |r| r.step));
+    let _ = writeln!(s, "\"frames\": {},", picks.len());
+    let _ = writeln!(s, "\"joints\": {joints},");
+    let _ = writeln!(s, "\"centre\": {},", list(centre.map(Some)));
+    let _ = writeln!(
+        s,
+        "\"side\": {},",
+        list([Some(side)]).trim_matches(['[', ']'])
+    );
+    let _ = writeln!(s, "\"grid\": {},", nice_step(side, 8.0));
+    let floor = origins
+        .iter()
+        .flatten()
+        .map(|p| p[2])
+        .chain(problem.waypoints.iter().map(|w| w.position[2] as f64))
+        .fold(f64::INFINITY, f64::min);
+    let _ = writeln!(
+        s,
+        "\"floor\": {},",
+        list([Some(floor)]).trim_matches(['[', ']'])
+    );
+    let _ = writeln!(
+        s,
+        "\"radius\": {},",
+        list([Some(0.012 * side)]).trim_matches(['[', ']'])
+    );
+    let engage = problem.settings.avoidance.engage_clearance as f64;
+    let _ = writeln!(
+        s,
+        "\"engage\": {},",
+        list([Some(engage)]).trim_matches(['[', ']'])
+    );
+    let _ = writeln!(s, "\"step\": {},", rows(&|k| Some(t.rows[k].step as f64)));
+    let _ = writeln!(s, "\"time\": {},", rows(&|k| Some(time[k])));
+    let _ = writeln!(s, "\"v\": {},", rows(&|k| t.rows[k].v));
+    let _ = writeln!(
+        s,
+        "\"position_error\": {},",
+        rows(&|k| t.rows[k].position_error)
+    );
+    let _ = writeln!(
+        s,
+        "\"orientation_error\": {},",
+        rows(&|k| t.rows[k].orientation_error)
+    );
+    let _ = writeln!(s, "\"clearance\": {},", rows(&|k| t.rows[k].clearance));
+    let flat = picks
+        .iter()
+        .flat_map(|&k| origins[k].iter().flatten().map(|v| Some(*v)));
+    let _ = writeln!(s, "\"origins\": {},", list(flat));
+    let axes = picks.iter().flat_map(|&k| {
+        let m = forward(problem, &t.rows[k].q).1;
+        // Columns: the end effector's x, y and z axes.
+        [0, 1, 2]
+            .into_iter()
+            .flat_map(move |c| (0..3).map(move |r| Some(m[r][c])))
+    });
+    let _ = writeln!(s, "\"end_axes\": {},", list(axes));
+    let stride = (origins.len() / 2000).max(1);
+    let path = origins
+        .iter()
+        .step_by(stride)
+        .chain(origins.last())
+        .filter_map(|o| o.last())
+        .flat_map(|p| p.map(Some));
+    let _ = writeln!(s, "\"path\": {},", list(path));
+    s.push_str("\"waypoints\": [");
+    for (i, w) in problem.waypoints.iter().enumerate() {
+        let axes = match w.orientation {
+            // Rows r11 r12 r13 / ...: columns are the wanted axes.
+            Some(r) => list(
+                [0, 1, 2]
+                    .into_iter()
+                    .flat_map(|c| (0..3).map(move |row| Some(r[row][c] as f64))),
+            ),
+            None => "null".into(),
+        };
+        let _ = write!(
+            s,
+            "{}{{\"position\": {}, \"axes\": {axes}}}",
+            if i > 0 { ", " } else { "" },
+            list(w.position.map(|v| Some(v as f64))),
+        );
+    }
+    s.push_str("],\n\"obstacles\": [\n");
+    for o in 0..problem.obstacles.len() {
+        let name = problem
+            .obstacle_names
+            .get(o)
+            .filter(|n| !n.is_empty())
+            .cloned()
+            .unwrap_or_else(|| format!("obstacle {}", o + 1));
+        let xyz = surface(problem, o, LAT, LON);
+        let _ = writeln!(
+            s,
+            "{}{{\"name\": {}, \"lat\": {LAT}, \"lon\": {LON}, \"xyz\": {}}}",
+            if o > 0 { ", " } else { "" },
+            string(&name),
+            list(xyz.iter().flatten().map(|v| Some(*v))),
+        );
+    }
+    s.push_str("]\n}");
+    s
+}
+
+/// The page.
+pub fn viewer(problem: &Problem, t: &Trajectory) -> String {
+    format!(
+        r#"<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>loading {name}</title>
+<style>
+html, body {{ margin: 0; height: 100%; overflow: hidden; background: #f4f6f9;
+  font: 13px "DejaVu Sans", Verdana, sans-serif; color: #1e1e1e; }}
+#view {{ position: absolute; inset: 0; }}
+#hud {{ position: absolute; left: 12px; top: 12px; width: 310px; padding: 10px 12px;
+  background: rgba(255, 255, 255, 0.93); border: 1px solid #c8ccd4; border-radius: 6px; }}
+#hud h1 {{ font-size: 15px; margin: 0 0 8px; }}
+#controls {{ display: flex; gap: 6px; align-items: center; margin-bottom: 8px; }}
+#seek {{ flex: 1; }}
+table {{ border-collapse: collapse; width: 100%; margin-bottom: 8px; }}
+td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: tabular-nums; }}
+.swatch {{ display: inline-block; width: 12px; height: 12px; margin-right: 6px; vertical-align: -1px; border-radius: 2px; }}
+#legend div {{ margin: 2px 0; }}
+.help {{ color: #667; font-size: 11px; margin-top: 8px; }}
+</style></head>
+<body>
+<div id="view"></div>
+<div id="hud">
+<h1>{name}</h1>
+<div id="controls"><button id="play">pause</button><input id="seek" type="range" min="0" value="0"></div>
+<table id="now"></table>
+<div id="legend"></div>
+<div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view &middot; viewer.html#frame=N opens at frame N</div>
+</div>
+<script>
+{three}
+</script>
+<script>
+const RUN = {run};
+</script>
+<script>
+{viewer}
+</script>
+</body></html>
+"#,
+        name = escape(&problem.name),
+        three = THREE_JS.trim_end(),
+        run = run_json(problem, t),
+        viewer = VIEWER_JS.trim_end(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_and_strings_are_json() {
+        let mut s = String::new();
+        for v in [
+            Some(0.0),
+            Some(1.5),
+            Some(-2.25e-7),
+            Some(f64::NAN),
+            None,
+            Some(1e9),
+        ] {
+            num(v, &mut s);
+            s.push(' ');
+        }
+        assert_eq!(s, "0 1.5 -2.2500e-7 null null 1.0000e9 ");
+        assert_eq!(string("a\"b</script>"), "\"a\\\"b\\u003c/script>\"");
+    }
+}

@@ -1,0 +1,189 @@
+//! `viewer.html` in a real browser: headless Chromium loads the page, which
+//! sets its title to `ok <frames> frames` once WebGL (SwiftShader, on the CPU)
+//! has drawn the first frame; then a screenshot shows the arm.
+//!
+//! Skipped with a message when no Chromium is installed, unless
+//! `CAPP_REQUIRE_CHROMIUM` is set (`scripts/test.sh` installs Debian's
+//! `chromium` and sets it): there a skip is a failure. `CAPP_CHROMIUM`
+//! names the browser to use.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use capp_sim::output::rows_csv;
+use capp_sim::render::viewer::viewer;
+use capp_sim::{plan, trajectory, Problem};
+
+const NAMES: [&str; 4] = [
+    "chromium",
+    "chromium-browser",
+    "google-chrome",
+    "google-chrome-stable",
+];
+
+fn chromium() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("CAPP_CHROMIUM") {
+        return Some(PathBuf::from(p));
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .flat_map(|dir| NAMES.iter().map(move |n| dir.join(n)))
+        .find(|p| p.is_file())
+}
+
+/// Headless, no GPU: WebGL runs on SwiftShader. The networking flags keep
+/// the browser from reaching out (there is no network to reach).
+const FLAGS: [&str; 11] = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    // Let the page's scripts run before the DOM is dumped or the shot taken.
+    "--virtual-time-budget=1500",
+];
+
+/// What the browser printed.
+struct Output {
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs the browser on `page` with `extra` flags; a hung browser is killed
+/// after ten minutes (a guard against hanging the suite, not a speed test).
+/// Its output goes to files, so a chatty browser cannot fill a pipe and stall.
+fn browse(exe: &Path, page: &Path, extra: &[String]) -> Output {
+    let scratch = tempfile::tempdir().unwrap();
+    let (out, err) = (scratch.path().join("stdout"), scratch.path().join("stderr"));
+    let mut child = Command::new(exe)
+        .args(FLAGS)
+        .arg(format!(
+            "--user-data-dir={}",
+            scratch.path().join("profile").display()
+        ))
+        .args(extra)
+        .arg(format!("file://{}", page.display()))
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out).unwrap())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .unwrap_or_else(|e| panic!("cannot start {}: {e}", exe.display()));
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(600) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{} still running after ten minutes", exe.display());
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let read =
+        |p: &Path| String::from_utf8_lossy(&std::fs::read(p).unwrap_or_default()).into_owned();
+    Output {
+        stdout: read(&out),
+        stderr: read(&err),
+    }
+}
+
+#[test]
+fn viewer_draws_in_a_real_browser() {
+    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
+    let Some(exe) = chromium() else {
+        assert!(
+            !required,
+            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
+        );
+        eprintln!(
+            "SKIPPED viewer_draws_in_a_real_browser: no Chromium found \
+             (apt-get install chromium, or set CAPP_CHROMIUM; scripts/test.sh installs it)"
+        );
+        return;
+    };
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml");
+    let problem = Problem::load(&path).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&text, Path::new("trajectory.csv")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("viewer.html");
+    let html = viewer(&problem, &t);
+    std::fs::write(&page, &html).unwrap();
+    let frames: usize = html
+        .split("\"frames\": ")
+        .nth(1)
+        .and_then(|s| s.split(',').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(frames > 10);
+
+    // The page's self-check, in its title.
+    let out = browse(&exe, &page, &["--dump-dom".to_string()]);
+    let dom = &out.stdout;
+    let title = dom
+        .split("<title>")
+        .nth(1)
+        .and_then(|s| s.split("</title>").next())
+        .unwrap_or("(no title)");
+    assert_eq!(
+        title,
+        format!("ok {frames} frames"),
+        "the page did not report success; browser stderr:\n{}",
+        out.stderr
+    );
+
+    // A screenshot: the 3-D view right of the panel is drawn, and the arm's
+    // orange links are in it.
+    let shot = dir.path().join("shot.png");
+    let out = browse(
+        &exe,
+        &page,
+        &[
+            "--window-size=1000,700".to_string(),
+            format!("--screenshot={}", shot.display()),
+        ],
+    );
+    assert!(
+        shot.is_file(),
+        "no screenshot; browser stderr:\n{}",
+        out.stderr
+    );
+    let file = std::fs::File::open(&shot).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let px = |x: usize, y: usize| {
+        let i = (y * w + x) * channels;
+        [buf[i], buf[i + 1], buf[i + 2]]
+    };
+    let background = [0xf4, 0xf6, 0xf9];
+    let (mut drawn, mut orange, mut colours) = (0, 0, std::collections::HashSet::new());
+    for y in 0..h {
+        for x in 360..w {
+            let c = px(x, y);
+            colours.insert(c);
+            if c.iter().zip(background).any(|(a, b)| a.abs_diff(b) > 12) {
+                drawn += 1;
+            }
+            let [r, g, b] = c.map(i32::from);
+            if r > 120 && r > g + 40 && g > b {
+                orange += 1;
+            }
+        }
+    }
+    let area = (w - 360) * h;
+    assert!(drawn * 50 > area, "only {drawn} of {area} pixels drawn");
+    assert!(colours.len() > 50, "{} colours", colours.len());
+    assert!(orange > 200, "{orange} pixels of links");
+}
