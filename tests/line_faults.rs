@@ -47,12 +47,17 @@ fn faults_on_the_line_are_reported_never_accepted_and_the_stream_recovers() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    // PIPS in free space, a setpoint every second step: ~3 300 frames.
+    // PIPS in free space under the first-order gradient law (a long plan,
+    // 6 500 steps), a setpoint every second step: ~3 300 frames.
     let scenario = dir.path().join("free_space_dense.toml");
     let base =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/pips_free_space.toml");
     let mut text = std::fs::read_to_string(base).unwrap();
-    text.push_str("\n[output]\nsetpoints = 2\n");
+    assert!(
+        !text.contains("[settings]"),
+        "the scenario grew a [settings] table"
+    );
+    text.push_str("\n[settings]\nlaw = \"gradient\"\n\n[output]\nsetpoints = 2\n");
     std::fs::write(&scenario, text).unwrap();
     let scenario_arg = scenario.to_str().unwrap();
     let host_dir = dir.path().join("host");

@@ -220,7 +220,10 @@ fn commands_sent_while_a_plan_runs_are_all_answered() {
     };
     let (_qemu, mut link) = Qemu::launch(&elf, None).expect("boot QEMU");
     link.timeout = Duration::from_secs(10);
-    let settings = Settings::default();
+    // The first-order gradient law: a long plan (some 1 900 steps), so that
+    // many commands arrive while it runs.
+    let mut settings = Settings::default();
+    settings.law.kind = capp_core::control::LawKind::Gradient;
     let waypoints = [far_target(), target(), far_target(), target()];
     let joints = pips::joints();
     let start = pips::home();
