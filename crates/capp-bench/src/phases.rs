@@ -20,7 +20,7 @@ use capp_core::control::{
 };
 use capp_core::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use capp_core::math::dot_slice;
-use capp_core::projection::{limit_rates, project, retreat, strength};
+use capp_core::projection::{approach, limit_rates, project, retreat, strength};
 use capp_core::step_size::advancement;
 use capp_core::{Planner, Scenario};
 
@@ -115,6 +115,11 @@ impl<const N: usize> PhaseBench<N> {
                 retreat: retreat(
                     self.field.clearance.map(|c| c.value),
                     settings.avoidance.engage_clearance,
+                ),
+                approach: approach(
+                    self.field.clearance.map(|c| c.value),
+                    settings.avoidance.engage_clearance,
+                    capp_core::planner::CONTACT_FLOOR,
                 ),
             };
             return damped_rate(

@@ -32,7 +32,7 @@ use crate::control::first_order::first_order_rate;
 use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::all_finite;
-use crate::projection::{retreat, strength};
+use crate::projection::{approach, retreat, strength};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
 use crate::step_size::advancement;
@@ -545,6 +545,11 @@ impl<const N: usize> Planner<N> {
                     retreat: retreat(
                         self.now.field.clearance.map(|c| c.value),
                         settings.avoidance.engage_clearance,
+                    ),
+                    approach: approach(
+                        self.now.field.clearance.map(|c| c.value),
+                        settings.avoidance.engage_clearance,
+                        CONTACT_FLOOR,
                     ),
                 };
                 let step = damped_rate(

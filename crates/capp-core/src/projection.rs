@@ -65,6 +65,24 @@ pub fn retreat(clearance: Option<f32>, engage: f32) -> f32 {
     }
 }
 
+/// Fraction of its way down to the contact floor that the closest pair may
+/// come closer in one step of the final approach (see [`approach`]).
+pub const APPROACH_GAIN: f32 = 0.5;
+
+/// How much the damped law's final approach may raise the potential in one
+/// step, from the closest pair's clearance `c`: `APPROACH_GAIN (c - floor) /
+/// c^2` with `floor = contact_floor * engage` (negative below the floor). For
+/// one pair `dP = -dc / c^2`, so the pair may come `APPROACH_GAIN` of the way
+/// to the floor per step: a target next to an obstacle is reached
+/// geometrically, never the surface.
+pub fn approach(clearance: Option<f32>, engage: f32, contact_floor: f32) -> f32 {
+    let floor = contact_floor * engage;
+    match clearance {
+        Some(c) if c > 0.0 => APPROACH_GAIN * (c - floor) / (c * c),
+        _ => 0.0,
+    }
+}
+
 /// Removes the fraction `strength` (in `[0, 1]`) of the component of `rate`
 /// (`n` values) that approaches the obstacles; with strength 1, afterwards
 /// `mu . rate <= 0`. `locked` is scratch of `n` flags. Returns whether the

@@ -77,6 +77,11 @@ use crate::linalg::{factor, solve, Sym6, Vec6};
 use crate::math::{dot_slice, max, min, norm, Vec3};
 use crate::robot::{JointKind, Robot};
 
+/// Steps within which the rest of the motion must fit (at the rate limits)
+/// for the final approach, which may come closer to obstacles than the
+/// travel's retreat allows ([`crate::projection::approach`]).
+pub const FINAL_APPROACH_STEPS: f32 = 3.0;
+
 /// Buffers of the damped least-squares law, sized once for `N` joints.
 #[derive(Clone, Debug)]
 pub struct DampedWorkspace<const N: usize> {
@@ -133,8 +138,13 @@ pub struct Guard<'a> {
     pub gradient: &'a [f32],
     /// How much of the approach to remove, in `[0, 1]` ([`crate::projection::strength`]).
     pub strength: f32,
-    /// How far to move away, in the potential's units ([`crate::projection::retreat`]).
+    /// How far to move away while travelling, in the potential's units
+    /// ([`crate::projection::retreat`]).
     pub retreat: f32,
+    /// How much closer the final approach may come in one step, in the
+    /// potential's units ([`crate::projection::approach`]): a target near an
+    /// obstacle lies inside the band the retreat keeps the arm out of.
+    pub approach: f32,
 }
 
 /// For `K g = M g - M J^T t`, `t = (J M J^T + mu Lambda^-1)^-1 J M g`: returns
@@ -179,6 +189,7 @@ fn apply_metric<const N: usize>(
 /// Returns whether it changed the step.
 fn project_guard<const N: usize>(
     guard: &Guard<'_>,
+    final_approach: bool,
     ws: &mut DampedWorkspace<N>,
     rate: &mut [f32],
 ) -> bool {
@@ -186,7 +197,12 @@ fn project_guard<const N: usize>(
         return false;
     }
     let approach = dot_slice(guard.gradient, rate);
-    let allowed = (1.0 - min(guard.strength, 1.0)) * max(approach, 0.0) - max(guard.retreat, 0.0);
+    let strength = min(guard.strength, 1.0);
+    let allowed = if final_approach {
+        (1.0 - strength) * max(approach, 0.0) + strength * guard.approach
+    } else {
+        (1.0 - strength) * max(approach, 0.0) - max(guard.retreat, 0.0)
+    };
     if !(approach > allowed && approach.is_finite() && allowed.is_finite()) {
         return false;
     }
@@ -364,8 +380,20 @@ pub fn damped_rate<const N: usize>(
         }
     }
 
-    // One-sided projection in the metric of the damped problem.
-    let constrained = project_guard(guard, ws, rate);
+    // One-sided projection in the metric of the damped problem; the final
+    // approach (the whole step fits in one time step) may come closer.
+    let unprojected = robot
+        .joints()
+        .iter()
+        .zip(rate.iter())
+        .map(|(joint, r)| r.abs() / joint.max_rate)
+        .fold(0.0f32, max);
+    let constrained = project_guard(
+        guard,
+        unprojected <= FINAL_APPROACH_STEPS * time_step_s,
+        ws,
+        rate,
+    );
 
     // Speed: the most loaded joint at its limit, or the whole step in one.
     let time_at_limits = robot
