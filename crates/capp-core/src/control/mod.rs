@@ -197,6 +197,9 @@ impl<const N: usize> LawWorkspace<N> {
 }
 
 /// `g_i = J_i^T e_i` for the four terms, each into `terms[i][..n]` (zero when inactive).
+// Out of line: unrolled for up to `N` joints at every call site, these
+// loops cost kilobytes of the board's flash (see the crate docs).
+#[inline(never)]
 pub fn lyapunov_terms<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -238,6 +241,9 @@ pub enum Drive {
 /// those per-joint gains (per second per unit of `G`); for eq. 15's sum, whose
 /// rate is no fixed multiple of `G`, `gain` is all zero.
 #[allow(clippy::too_many_arguments)]
+// Out of line: unrolled for up to `N` joints at every call site, these
+// loops cost kilobytes of the board's flash (see the crate docs).
+#[inline(never)]
 pub fn weighted_rate<const N: usize>(
     robot: &Robot<N>,
     q: &[f32],
@@ -320,6 +326,9 @@ pub fn weighted_rate<const N: usize>(
 }
 
 /// `-dV/dt = G . rate` for a joint rate, with `G = sum_i w_i g_i` (eq. 13).
+// Out of line: unrolled for up to `N` joints at every call site, these
+// loops cost kilobytes of the board's flash (see the crate docs).
+#[inline(never)]
 pub fn descent_rate<const N: usize>(
     terms: &[[f32; N]; 4],
     settings: &LawSettings,
