@@ -95,6 +95,11 @@ struct FuzzSettings {
     engage_clearance: Num,
     advance_fraction: Num,
     damping: Num,
+    escape_attempts: u8,
+    escape_window: u16,
+    escape_walk_steps: u16,
+    escape_reach: Num,
+    escape_seed: u32,
     max_steps: u16,
     stall_window: u16,
     stall_progress: Num,
@@ -138,6 +143,12 @@ fn settings(f: &FuzzSettings) -> Settings {
         _ => LawKind::DampedLeastSquares,
     };
     s.law.damping = f.damping.positive(1.5);
+    // Mostly valid; 0 windows and walks, and reach above 1, check the refusal.
+    s.escape.attempts = f.escape_attempts % 16;
+    s.escape.window = f.escape_window % 100;
+    s.escape.walk_steps = f.escape_walk_steps % 100;
+    s.escape.reach = f.escape_reach.positive(1.2);
+    s.escape.seed = f.escape_seed;
     s.avoidance.advance_fraction = f.advance_fraction.positive(1.5);
     s.law.orientation_scale = f.orientation_scale.positive(20.0);
     s.law.approach_radius = f.approach_radius.positive(5.0);

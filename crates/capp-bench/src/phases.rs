@@ -14,13 +14,13 @@
 //! step costs beyond their sum is the state machine and copying.
 
 use capp_core::avoidance::{potential_gradient, ObstacleField};
-use capp_core::control::damped::{damped_rate, DampedWorkspace, Guard};
+use capp_core::control::damped::{damped_rate, DampedWorkspace};
 use capp_core::control::{
     descent_rate, lyapunov_terms, pose_error, weighted_rate, LawKind, PoseError, Target,
 };
 use capp_core::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use capp_core::math::dot_slice;
-use capp_core::projection::{approach, limit_rates, project, retreat, strength};
+use capp_core::projection::{approach, limit_rates, project, retreat, strength, Guard};
 use capp_core::step_size::advancement;
 use capp_core::{Planner, Scenario};
 

@@ -20,6 +20,7 @@
 //! | [`linalg`] | the 6 x 6 symmetric positive definite solve the damped law needs |
 //! | [`projection`] | keeping the joint rate orthogonal to the obstacle gradient (eqs. 22-24) |
 //! | [`step_size`] | how long a step is: the listing's rule, its bounds, conservative advancement |
+//! | [`escape`] | what happens at a dead end: remembered, walked away from, descended again |
 //! | [`mission`] | waypoints, tolerances and planner settings |
 //! | [`scenario`] | robot + obstacles + mission, validated together |
 //! | [`planner`] | the per-step state machine: law, step size, integration, acceptance, outcome |
@@ -59,6 +60,7 @@ extern crate std;
 
 pub mod avoidance;
 pub mod control;
+pub mod escape;
 pub mod kinematics;
 pub mod linalg;
 pub mod math;

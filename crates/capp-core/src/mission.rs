@@ -10,6 +10,7 @@
 
 use crate::avoidance::AvoidanceSettings;
 use crate::control::LawSettings;
+use crate::escape::EscapeSettings;
 use crate::robot::Robot;
 
 /// A point to pass through, or the final target.
@@ -69,6 +70,8 @@ pub struct Settings {
     pub stall_progress: f32,
     /// Most halvings of a step that would enter an obstacle or raise `V`, 0 to 16.
     pub max_halvings: u8,
+    /// What happens at a dead end (see [`crate::escape`]).
+    pub escape: EscapeSettings,
 }
 
 impl Default for Settings {
@@ -85,6 +88,7 @@ impl Default for Settings {
             stall_window: 400,
             stall_progress: 0.01,
             max_halvings: 8,
+            escape: EscapeSettings::default(),
         }
     }
 }
@@ -159,6 +163,8 @@ pub enum SettingsField {
     AdvanceFraction,
     /// `law.damping`
     Damping,
+    /// `escape.window`, `escape.walk_steps` or `escape.reach`
+    Escape,
     /// `max_steps`
     MaxSteps,
     /// `stall_window`
@@ -190,6 +196,9 @@ impl core::fmt::Display for SettingsField {
             }
             SettingsField::AdvanceFraction => "advance_fraction must be in (0, 1]",
             SettingsField::Damping => "damping must be positive and at most 1",
+            SettingsField::Escape => {
+                "escape: window and walk_steps must be at least 1, reach in (0, 1]"
+            }
             SettingsField::EngageClearance => {
                 "engage_clearance must be non-negative and at most 1e6"
             }
@@ -309,6 +318,13 @@ impl Settings {
                 F::StallProgress,
             ),
             (self.max_halvings <= 16, F::MaxHalvings),
+            (
+                self.escape.window >= 1
+                    && self.escape.walk_steps >= 1
+                    && positive(self.escape.reach)
+                    && self.escape.reach <= 1.0,
+                F::Escape,
+            ),
         ];
         match checks.iter().find(|(ok, _)| !ok) {
             Some((_, field)) => Err(MissionError::BadSetting(*field)),

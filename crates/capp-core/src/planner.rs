@@ -27,12 +27,15 @@
 //! halving. Nothing allocates; the planner is a fixed-size value.
 
 use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
-use crate::control::damped::{damped_rate, Guard};
+use crate::control::damped::damped_rate;
 use crate::control::first_order::first_order_rate;
+use crate::control::joint_space::joint_rate;
 use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
+use crate::escape::{Escape, EscapeState};
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::all_finite;
-use crate::projection::{approach, retreat, strength};
+use crate::mission::Settings;
+use crate::projection::{approach, retreat, strength, Guard};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
 use crate::step_size::advancement;
@@ -42,6 +45,10 @@ use crate::step_size::advancement;
 /// inflated surface (where `f32` rounding decides contact) instead of
 /// creeping onto it in ever smaller steps.
 pub const CONTACT_FLOOR: f32 = 0.01;
+
+/// Pose error, as a fraction of the robot's reach, below which a stall is
+/// `f32` rounding, not a dead end: no escape is tried.
+pub const NUMERIC_FLOOR: f32 = 1.0e-5;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -154,6 +161,8 @@ pub struct StepReport {
     pub constrained: bool,
     /// How many times the step was halved.
     pub halvings: u8,
+    /// Whether the planner is escaping a dead end, and which attempt.
+    pub escape: EscapeState,
 }
 
 /// Everything known about one configuration.
@@ -233,6 +242,8 @@ pub struct Planner<const N: usize> {
     rate: [f32; N],
     /// The buffers of the law that runs.
     law: LawWorkspace<N>,
+    /// The dead-end escape's state.
+    escape: Escape<N>,
     step: u32,
     phase: Phase,
     /// Position error change over the last step (the listing's `error_step`).
@@ -266,6 +277,7 @@ impl<const N: usize> Planner<N> {
             q_next: [0.0; N],
             rate: [0.0; N],
             law: LawWorkspace::for_kind(LawKind::DampedLeastSquares),
+            escape: Escape::new(0, &[]),
             step: 0,
             phase: Phase::Done(Outcome::Stalled),
             error_step: 0.0,
@@ -281,6 +293,7 @@ impl<const N: usize> Planner<N> {
                 phase: Phase::Done(Outcome::Stalled),
                 constrained: false,
                 halvings: 0,
+                escape: EscapeState::Descending { attempts: 0 },
             },
         };
         planner.reset(&[]);
@@ -331,6 +344,7 @@ impl<const N: usize> Planner<N> {
         if !self.law.suits(kind) {
             self.law.reset(kind);
         }
+        self.escape.reset(scenario.settings().escape.seed, start);
         // Scenario::new refuses a mission without waypoints, so this never fails.
         let Some(&target) = scenario.targets().first() else {
             return Err(StartError::ScenarioMismatch);
@@ -365,6 +379,7 @@ impl<const N: usize> Planner<N> {
             q_next,
             rate,
             law,
+            escape,
             step,
             phase,
             error_step,
@@ -381,6 +396,7 @@ impl<const N: usize> Planner<N> {
         *q_next = *q;
         rate.fill(0.0);
         law.clear();
+        escape.reset(0, start);
         *step = 0;
         *phase = if len == 0 {
             Phase::Done(Outcome::Stalled)
@@ -400,6 +416,7 @@ impl<const N: usize> Planner<N> {
             phase: *phase,
             constrained: false,
             halvings: 0,
+            escape: EscapeState::Descending { attempts: 0 },
         };
     }
 
@@ -449,6 +466,7 @@ impl<const N: usize> Planner<N> {
             phase: self.phase,
             constrained,
             halvings,
+            escape: self.escape.state(),
         }
     }
 
@@ -479,6 +497,73 @@ impl<const N: usize> Planner<N> {
             self.best_v = self.now.error.v;
             self.best_step = self.step;
             self.error_step = 0.0;
+            let n = self.n.min(N);
+            self.escape.next_waypoint(&self.q[..n], self.now.error.v);
+        }
+    }
+
+    /// Whether the law has made no progress for long enough to call it a
+    /// dead end: the escape's window, or (escapes off) the stall window.
+    fn stalled(&self, settings: &Settings) -> bool {
+        let window = if settings.escape.attempts > 0 {
+            settings.escape.window as u32
+        } else {
+            settings.stall_window
+        };
+        self.step - self.best_step >= window
+    }
+
+    /// A dead end: escape, or (escapes off, or spent and back at the best
+    /// configuration) end `Stalled`.
+    fn on_stall<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+    ) {
+        let settings = scenario.settings();
+        // Within f32 noise of the target there is nothing to escape from.
+        let noise = NUMERIC_FLOOR * scenario.robot().reach();
+        if settings.escape.attempts == 0 || self.now.error.v <= 0.5 * noise * noise {
+            self.phase = Phase::Done(Outcome::Stalled);
+            return;
+        }
+        let n = self.n.min(N);
+        self.escape.on_stall(
+            &settings.escape,
+            scenario.robot(),
+            scenario.obstacles(),
+            &self.q[..n],
+            &self.now.frames,
+            self.now.error.v,
+            &self.now.mu[..n],
+            self.now.field.clearance.map(|c| c.obstacle),
+            target.position,
+            &mut self.next.frames,
+        );
+    }
+
+    /// After a step of a walk: is it over? A finished walk hands back to the
+    /// law with a fresh stall window; a finished return ends `Stalled`.
+    fn after_walk(&mut self, settings: &Settings, robot: &Robot<N>) {
+        let n = self.n.min(N);
+        let Some(goal) = self.escape.goal() else {
+            return;
+        };
+        let returning = self.escape.state() == EscapeState::Returning;
+        let mut gap = 0.0f32;
+        for ((joint, &qj), &gj) in robot.joints().iter().zip(&self.q[..n]).zip(&goal[..n]) {
+            gap = crate::math::max(gap, (gj - qj).abs() / joint.max_rate);
+        }
+        if self
+            .escape
+            .walked(&settings.escape, gap, settings.time_step_s)
+        {
+            if returning {
+                self.phase = Phase::Done(Outcome::Stalled);
+            } else {
+                self.best_v = self.now.error.v;
+                self.best_step = self.step;
+            }
         }
     }
 
@@ -525,8 +610,32 @@ impl<const N: usize> Planner<N> {
             // switching): fresh buffers for it.
             self.law.reset(settings.law.kind);
         }
-        let (drive, constrained, mut h) = match &mut self.law {
-            LawWorkspace::FirstOrder(ws) => first_order_rate(
+        let clearance = self.now.field.clearance.map(|c| c.value);
+        let guard = Guard {
+            gradient: &self.now.mu[..n],
+            strength: engage,
+            retreat: retreat(clearance, settings.avoidance.engage_clearance),
+            approach: approach(
+                clearance,
+                settings.avoidance.engage_clearance,
+                CONTACT_FLOOR,
+            ),
+        };
+        let walking = self.escape.goal().is_some();
+        let (drive, constrained, mut h) = match (self.escape.goal(), &mut self.law) {
+            // Escaping: straight to the walk's goal in joint space.
+            (Some(goal), _) => {
+                let step = joint_rate(
+                    robot,
+                    &self.q[..n],
+                    &goal[..n],
+                    &guard,
+                    settings.time_step_s,
+                    &mut self.rate[..n],
+                );
+                (step.drive, step.constrained, settings.time_step_s)
+            }
+            (None, LawWorkspace::FirstOrder(ws)) => first_order_rate(
                 robot,
                 &self.now.frames,
                 &self.q[..n],
@@ -538,20 +647,7 @@ impl<const N: usize> Planner<N> {
                 ws,
                 &mut self.rate[..n],
             ),
-            LawWorkspace::Damped(ws) => {
-                let guard = Guard {
-                    gradient: &self.now.mu[..n],
-                    strength: engage,
-                    retreat: retreat(
-                        self.now.field.clearance.map(|c| c.value),
-                        settings.avoidance.engage_clearance,
-                    ),
-                    approach: approach(
-                        self.now.field.clearance.map(|c| c.value),
-                        settings.avoidance.engage_clearance,
-                        CONTACT_FLOOR,
-                    ),
-                };
+            (None, LawWorkspace::Damped(ws)) => {
                 let step = damped_rate(
                     robot,
                     &self.now.frames,
@@ -612,7 +708,8 @@ impl<const N: usize> Planner<N> {
                 let (c_next, c_now) = (closest(&self.next), closest(&self.now));
                 let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
                 let safe = self.next.field.clear && (c_next >= floor || c_next >= c_now);
-                let descends = constrained || self.next.error.v <= self.now.error.v;
+                // A walk may climb V: it is leaving a dead end.
+                let descends = constrained || walking || self.next.error.v <= self.now.error.v;
                 if safe && descends && all_finite(&self.q_next[..n]) {
                     accepted = true;
                     break;
@@ -635,15 +732,21 @@ impl<const N: usize> Planner<N> {
         }
 
         // Progress and outcome.
-        if self.now.error.v < self.best_v * (1.0 - settings.stall_progress) {
-            self.best_v = self.now.error.v;
-            self.best_step = self.step;
+        if walking {
+            self.after_walk(&settings, robot);
+        } else {
+            if self.now.error.v < self.best_v * (1.0 - settings.stall_progress) {
+                self.best_v = self.now.error.v;
+                self.best_step = self.step;
+            }
+            self.escape.record(&self.q[..n], self.now.error.v);
         }
         self.pass_waypoints(scenario);
         if let Phase::Moving { .. } = self.phase {
-            if self.step - self.best_step >= settings.stall_window {
-                self.phase = Phase::Done(Outcome::Stalled);
-            } else if self.step >= settings.max_steps {
+            if !walking && self.stalled(&settings) {
+                self.on_stall(scenario, &target);
+            }
+            if self.step >= settings.max_steps && !self.is_done() {
                 self.phase = Phase::Done(Outcome::Capped);
             }
         }

@@ -47,6 +47,44 @@ pub fn strength(clearance: Option<f32>, engage: f32) -> f32 {
     }
 }
 
+/// A one-sided limit on a step's approach to obstacles, for the laws that
+/// project in their own metric (damped least squares, joint-space moves):
+/// after projection `gradient . dq` is at most [`Guard::allowed`].
+#[derive(Clone, Copy, Debug)]
+pub struct Guard<'a> {
+    /// The gradient of a potential that grows as the arm approaches
+    /// (`n` values): eq. 20's `mu = dP/dq`.
+    pub gradient: &'a [f32],
+    /// How much of the approach to remove, in `[0, 1]` ([`strength`]).
+    pub strength: f32,
+    /// How far to move away while travelling, in the potential's units
+    /// ([`retreat`]).
+    pub retreat: f32,
+    /// How much closer the final approach may come in one step, in the
+    /// potential's units ([`approach`]): a target near an obstacle lies
+    /// inside the band the retreat keeps the arm out of.
+    pub approach: f32,
+}
+
+impl Guard<'_> {
+    /// The most `gradient . dq` may be for a step whose unprojected value is
+    /// `approach`, or `None` when the step needs no projection: travelling,
+    /// `(1 - strength) max(approach, 0) - retreat`; on the final approach,
+    /// `(1 - strength) max(approach, 0) + strength approach_allowance`.
+    pub fn allowed(&self, approach: f32, final_approach: bool) -> Option<f32> {
+        if self.strength <= 0.0 || self.strength.is_nan() {
+            return None;
+        }
+        let strength = min(self.strength, 1.0);
+        let allowed = if final_approach {
+            (1.0 - strength) * max(approach, 0.0) + strength * self.approach
+        } else {
+            (1.0 - strength) * max(approach, 0.0) - max(self.retreat, 0.0)
+        };
+        (approach > allowed && approach.is_finite() && allowed.is_finite()).then_some(allowed)
+    }
+}
+
 /// Fraction of the potential's excess over its engaged level that the damped
 /// law's projection removes per step (see [`retreat`]).
 pub const RETREAT_GAIN: f32 = 0.2;

@@ -92,13 +92,15 @@ fn a_fully_stretched_arm_folds_to_a_target_inside_its_reach() {
 #[test]
 fn a_target_straight_back_along_a_stretched_arm_is_a_detected_dead_end() {
     // Exactly along the arm the error is orthogonal to every column of J_p:
-    // the gradient J^T e is exactly zero, so a gradient law cannot move. The
-    // planner must say so (Stalled, no NaN, not a single joint moved) within
-    // one stall window, and the paper's remedy, a waypoint, gets it there.
-    let settings = Settings {
+    // the gradient J^T e is exactly zero, so no law can move. With escapes
+    // off the planner must say so (Stalled, no NaN, not a single joint
+    // moved) within one stall window, and the paper's remedy, a waypoint,
+    // gets it there; with escapes on (the default) it gets there by itself.
+    let mut settings = Settings {
         max_steps: 4000,
         ..Settings::default()
     };
+    settings.escape.attempts = 0;
     let target = Waypoint::at([15.0, 0.0, 0.0]);
     let sc = scenario(&planar(), &[], &[target], settings);
     let (outcome, steps, q) = run(&sc, &[0.0; 3]);
@@ -109,6 +111,10 @@ fn a_target_straight_back_along_a_stretched_arm_is_a_detected_dead_end() {
     let sc = scenario(&planar(), &[], &[via, target], settings);
     let (outcome, _, _) = run(&sc, &[0.0; 3]);
     assert_eq!(outcome, Outcome::Reached);
+    settings.escape = Settings::default().escape;
+    let sc = scenario(&planar(), &[], &[target], settings);
+    let (outcome, _, _) = run(&sc, &[0.0; 3]);
+    assert_eq!(outcome, Outcome::Reached, "escaped the dead end");
 }
 
 #[test]

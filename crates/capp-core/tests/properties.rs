@@ -153,6 +153,7 @@ struct SettingsSpec {
     engage_clearance: f32,
     advance_fraction: f32,
     damping: f32,
+    escape: (u8, u16, u16, f32, u32),
     max_steps: u32,
     stall_window: u32,
     max_halvings: u8,
@@ -176,6 +177,12 @@ impl SettingsSpec {
         };
         s.law.damping = self.damping;
         s.avoidance.advance_fraction = self.advance_fraction;
+        let (attempts, window, walk_steps, reach, seed) = self.escape;
+        s.escape.attempts = attempts;
+        s.escape.window = window;
+        s.escape.walk_steps = walk_steps;
+        s.escape.reach = reach;
+        s.escape.seed = seed;
         s.law.orientation_scale = self.orientation_scale;
         s.law.approach_radius = self.approach_radius;
         s.avoidance.joint_margin = self.joint_margin;
@@ -209,6 +216,14 @@ fn settings_spec(max_steps: u32) -> impl Strategy<Value = SettingsSpec> {
             0u8..=10,
         ),
         (0.05f32..=1.0, prop_oneof![Just(1.0e-3f32), 1.0e-5f32..=1.0]),
+        // Escapes off in a third of the cases, so that runs also stall.
+        (
+            prop_oneof![1 => Just(0u8), 2 => 1u8..=6],
+            3u16..60,
+            1u16..40,
+            0.02f32..=1.0,
+            any::<u32>(),
+        ),
     )
         .prop_map(
             |(
@@ -231,6 +246,7 @@ fn settings_spec(max_steps: u32) -> impl Strategy<Value = SettingsSpec> {
                     max_halvings,
                 ),
                 (advance_fraction, damping),
+                escape,
             )| SettingsSpec {
                 time_step_s,
                 position_tolerance,
@@ -245,6 +261,7 @@ fn settings_spec(max_steps: u32) -> impl Strategy<Value = SettingsSpec> {
                 engage_clearance,
                 advance_fraction,
                 damping,
+                escape,
                 max_steps,
                 stall_window,
                 max_halvings,

@@ -3,6 +3,7 @@
 
 use capp_core::avoidance::AvoidanceSettings;
 use capp_core::control::{LawKind as CoreLaw, LawSettings};
+use capp_core::escape::EscapeSettings;
 use capp_core::planner::Outcome as CoreOutcome;
 use capp_core::{JointKind as CoreKind, SuperEllipsoid};
 
@@ -124,6 +125,11 @@ impl From<capp_core::Settings> for Settings {
             stall_window: s.stall_window,
             stall_progress: s.stall_progress,
             max_halvings: s.max_halvings,
+            escape_attempts: s.escape.attempts,
+            escape_window: s.escape.window as u32,
+            escape_walk_steps: s.escape.walk_steps as u32,
+            escape_reach: s.escape.reach,
+            escape_seed: s.escape.seed,
         }
     }
 }
@@ -158,6 +164,14 @@ impl From<Settings> for capp_core::Settings {
             stall_window: s.stall_window,
             stall_progress: s.stall_progress,
             max_halvings: s.max_halvings,
+            // Beyond u16 is refused by validation (0 is refused too).
+            escape: EscapeSettings {
+                attempts: s.escape_attempts,
+                window: u16::try_from(s.escape_window).unwrap_or(0),
+                walk_steps: u16::try_from(s.escape_walk_steps).unwrap_or(0),
+                reach: s.escape_reach,
+                seed: s.escape_seed,
+            },
         }
     }
 }

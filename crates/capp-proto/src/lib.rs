@@ -165,6 +165,16 @@ pub struct Settings {
     pub stall_progress: f32,
     /// Most step halvings.
     pub max_halvings: u8,
+    /// Dead-end escape attempts per waypoint (0: none).
+    pub escape_attempts: u8,
+    /// Steps without progress that make a dead end.
+    pub escape_window: u32,
+    /// Most steps of one escape walk.
+    pub escape_walk_steps: u32,
+    /// A first walk's reach, fraction of each joint's range.
+    pub escape_reach: f32,
+    /// Seed of the walks' generator.
+    pub escape_seed: u32,
 }
 
 /// The listing's setpoint rule (`joints.dat`): a setpoint whenever the

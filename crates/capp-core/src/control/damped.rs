@@ -71,10 +71,11 @@
 //!   shortens `h` by conservative advancement ([`crate::step_size`]) and
 //!   accepts a step only if it is clear and, unprojected, lowers `V`.
 
-use crate::control::{joint_weight, Drive, LawSettings, PoseError};
+use crate::control::{joint_weight, time_at_limits, Drive, LawSettings, PoseError};
 use crate::kinematics::Frames;
 use crate::linalg::{factor, solve, Sym6, Vec6};
-use crate::math::{dot_slice, max, min, norm, Vec3};
+use crate::math::{dot_slice, max, norm, Vec3};
+use crate::projection::Guard;
 use crate::robot::{JointKind, Robot};
 
 /// Steps within which the rest of the motion must fit (at the rate limits)
@@ -129,24 +130,6 @@ pub struct DampedStep {
     pub time_at_limits_s: f32,
 }
 
-/// A one-sided limit on the step's approach to obstacles: after projection
-/// `gradient . dq <= (1 - strength) max(gradient . dq*, 0) - retreat`.
-#[derive(Clone, Copy, Debug)]
-pub struct Guard<'a> {
-    /// The gradient of a potential that grows as the arm approaches
-    /// (`n` values): eq. 20's `mu = dP/dq`.
-    pub gradient: &'a [f32],
-    /// How much of the approach to remove, in `[0, 1]` ([`crate::projection::strength`]).
-    pub strength: f32,
-    /// How far to move away while travelling, in the potential's units
-    /// ([`crate::projection::retreat`]).
-    pub retreat: f32,
-    /// How much closer the final approach may come in one step, in the
-    /// potential's units ([`crate::projection::approach`]): a target near an
-    /// obstacle lies inside the band the retreat keeps the arm out of.
-    pub approach: f32,
-}
-
 /// For `K g = M g - M J^T t`, `t = (J M J^T + mu Lambda^-1)^-1 J M g`: returns
 /// `(g . K g, t)`; `K g` itself is then one O(n) pass ([`apply_metric`]).
 fn metric_of<const N: usize>(
@@ -193,19 +176,10 @@ fn project_guard<const N: usize>(
     ws: &mut DampedWorkspace<N>,
     rate: &mut [f32],
 ) -> bool {
-    if guard.strength <= 0.0 || guard.strength.is_nan() {
-        return false;
-    }
     let approach = dot_slice(guard.gradient, rate);
-    let strength = min(guard.strength, 1.0);
-    let allowed = if final_approach {
-        (1.0 - strength) * max(approach, 0.0) + strength * guard.approach
-    } else {
-        (1.0 - strength) * max(approach, 0.0) - max(guard.retreat, 0.0)
-    };
-    if !(approach > allowed && approach.is_finite() && allowed.is_finite()) {
+    let Some(allowed) = guard.allowed(approach, final_approach) else {
         return false;
-    }
+    };
     let (along, t) = metric_of(guard.gradient, &ws.columns, &ws.metric, &ws.factor);
     if !(along > 0.0 && along.is_finite()) {
         return false;
@@ -381,27 +355,13 @@ pub fn damped_rate<const N: usize>(
     }
 
     // One-sided projection in the metric of the damped problem; the final
-    // approach (the whole step fits in one time step) may come closer.
-    let unprojected = robot
-        .joints()
-        .iter()
-        .zip(rate.iter())
-        .map(|(joint, r)| r.abs() / joint.max_rate)
-        .fold(0.0f32, max);
-    let constrained = project_guard(
-        guard,
-        unprojected <= FINAL_APPROACH_STEPS * time_step_s,
-        ws,
-        rate,
-    );
+    // approach (the rest within a few steps at the rate limits) may come
+    // closer.
+    let final_approach = time_at_limits(robot, rate) <= FINAL_APPROACH_STEPS * time_step_s;
+    let constrained = project_guard(guard, final_approach, ws, rate);
 
     // Speed: the most loaded joint at its limit, or the whole step in one.
-    let time_at_limits = robot
-        .joints()
-        .iter()
-        .zip(rate.iter())
-        .map(|(joint, r)| r.abs() / joint.max_rate)
-        .fold(0.0f32, max);
+    let time_at_limits = time_at_limits(robot, rate);
     if !(time_at_limits > 0.0 && time_at_limits.is_finite()) {
         return idle(rate);
     }

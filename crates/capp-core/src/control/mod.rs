@@ -48,6 +48,7 @@
 
 pub mod damped;
 pub mod first_order;
+pub mod joint_space;
 
 use crate::kinematics::{end_direction_error, end_point_force, Frames};
 use crate::math::{dot_slice, max, min, norm_slice, Mat3, Vec3};
@@ -229,6 +230,9 @@ pub enum Drive {
     TotalGradient,
     /// The damped least-squares step ([`damped`]).
     Damped,
+    /// Straight to a joint configuration ([`joint_space`]): an escape walk,
+    /// the return to the best configuration, a joint-space waypoint.
+    Joints,
     /// Nothing to do: the gradient is zero, or every joint that could reduce
     /// `V` sits at a limit.
     Idle,
@@ -339,6 +343,18 @@ pub fn descent_rate<const N: usize>(
         .enumerate()
         .map(|(j, r)| (terms[3][j] + lambda_sq * (terms[0][j] + terms[1][j] + terms[2][j])) * r)
         .sum()
+}
+
+/// `T = max_j |rate_j| / qdot_max_j`: how long `rate`, read as a joint
+/// displacement, takes with the most loaded joint at its rate limit (seconds
+/// for a displacement; the multiple of the limits for a rate).
+pub fn time_at_limits<const N: usize>(robot: &Robot<N>, rate: &[f32]) -> f32 {
+    robot
+        .joints()
+        .iter()
+        .zip(rate)
+        .map(|(joint, r)| r.abs() / joint.max_rate)
+        .fold(0.0f32, max)
 }
 
 /// `min(1, error / radius)`; 1 when `radius` is not positive.

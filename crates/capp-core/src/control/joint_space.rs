@@ -1,0 +1,83 @@
+//! Driving the joints straight to a configuration: the dead-end escape's
+//! walks and its return to the best configuration ([`crate::escape`]), and
+//! joint-space waypoints.
+//!
+//! The step toward `goal` is `dq* = goal - q`, the straight joint-space
+//! segment; the metric is the rate limits', `M = diag(qdot_max^2)`, so its
+//! length is seconds at the limits and the law, like the damped one, does not
+//! depend on the units. Obstacles: the one-sided projection against the
+//! potential's gradient `mu` (eq. 24) in that metric,
+//!
+//! ```text
+//! dq = dq* - k M mu,   k = (mu . dq* - allowed) / (mu . M mu)
+//! ```
+//!
+//! with the same [`Guard`] as the damped law (retreat while travelling, a
+//! geometric approach within [`FINAL_APPROACH_STEPS`] of the goal). Then the
+//! rate is `dq` scaled uniformly so that the most loaded joint runs at its
+//! limit, or the whole rest in one step. The planner checks every step like
+//! any other (conservative advancement, clearance).
+
+use crate::control::damped::{DampedStep, FINAL_APPROACH_STEPS};
+use crate::control::{time_at_limits, Drive};
+use crate::math::{dot_slice, max};
+use crate::projection::Guard;
+use crate::robot::Robot;
+
+/// The rate (per second, into `rate`) that takes the joints from `q` toward
+/// `goal` at the rate limits, projected against `guard`, for a step of
+/// `time_step_s`. All slices hold `robot.len()` values.
+pub fn joint_rate<const N: usize>(
+    robot: &Robot<N>,
+    q: &[f32],
+    goal: &[f32],
+    guard: &Guard<'_>,
+    time_step_s: f32,
+    rate: &mut [f32],
+) -> DampedStep {
+    let n = robot.len().min(rate.len());
+    let rate = &mut rate[..n];
+    for ((r, &qj), &gj) in rate.iter_mut().zip(q).zip(goal) {
+        *r = gj - qj;
+    }
+    let gap = time_at_limits(robot, rate);
+    let mut constrained = false;
+    let approach = dot_slice(guard.gradient, rate);
+    if let Some(allowed) = guard.allowed(approach, gap <= FINAL_APPROACH_STEPS * time_step_s) {
+        let metric = |j: usize| {
+            robot
+                .joints()
+                .get(j)
+                .map_or(0.0, |joint| joint.max_rate * joint.max_rate)
+        };
+        let along: f32 = guard
+            .gradient
+            .iter()
+            .enumerate()
+            .map(|(j, g)| g * g * metric(j))
+            .sum();
+        if along > 0.0 && along.is_finite() {
+            let k = (approach - allowed) / along;
+            for (j, (r, g)) in rate.iter_mut().zip(guard.gradient).enumerate() {
+                *r -= k * metric(j) * g;
+            }
+            constrained = true;
+        }
+    }
+    let time = time_at_limits(robot, rate);
+    if !(time > 0.0 && time.is_finite()) {
+        rate.fill(0.0);
+        return DampedStep {
+            drive: Drive::Idle,
+            constrained: false,
+            time_at_limits_s: 0.0,
+        };
+    }
+    let k = 1.0 / max(time, time_step_s);
+    rate.iter_mut().for_each(|r| *r *= k);
+    DampedStep {
+        drive: Drive::Joints,
+        constrained,
+        time_at_limits_s: time,
+    }
+}
