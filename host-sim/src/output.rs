@@ -18,6 +18,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use capp_core::escape::{EscapeState, Side};
 use capp_core::Outcome;
 
 use crate::plan::{Row, RunResult};
@@ -26,7 +27,7 @@ use crate::problem::{Problem, SourceKind};
 /// Columns before the joint values.
 pub const LEAD_COLUMNS: [&str; 2] = ["step", "h_s"];
 /// Columns after the joint values.
-pub const TRAJECTORY_COLUMNS: [&str; 21] = [
+pub const TRAJECTORY_COLUMNS: [&str; 22] = [
     "x",
     "y",
     "z",
@@ -48,6 +49,7 @@ pub const TRAJECTORY_COLUMNS: [&str; 21] = [
     "waypoint",
     "constrained",
     "halvings",
+    "escape",
 ];
 /// The marker written last into a finished output folder.
 pub const COMPLETE_MARKER: &str = "COMPLETE";
@@ -58,6 +60,33 @@ pub fn outcome_name(outcome: Outcome) -> &'static str {
         Outcome::Reached => "reached",
         Outcome::Stalled => "stalled",
         Outcome::Capped => "capped",
+    }
+}
+
+/// What the `escape` column says: empty while the law drives, else
+/// `walk K`, `detour K obstacle O +z` (1-based attempt and obstacle, the side
+/// of the obstacle in its own frame) or `return`.
+pub fn escape_label(state: EscapeState) -> String {
+    let side = |s: Side| {
+        format!(
+            "obstacle {} {}{}",
+            s.obstacle as u32 + 1,
+            if s.positive { '+' } else { '-' },
+            ['x', 'y', 'z'][(s.axis as usize).min(2)]
+        )
+    };
+    match state {
+        EscapeState::Descending { .. } => String::new(),
+        EscapeState::Walking {
+            attempt,
+            side: None,
+        } => format!("walk {attempt}"),
+        EscapeState::Walking {
+            attempt,
+            side: Some(s),
+        } => format!("walk {attempt} {}", side(s)),
+        EscapeState::Detouring { attempt, side: s } => format!("detour {attempt} {}", side(s)),
+        EscapeState::Returning => "return".into(),
     }
 }
 
@@ -100,6 +129,7 @@ pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result
                 .map_or(String::new(), |c| u8::from(c).to_string()),
         );
         rec.push(r.halvings.map_or(String::new(), |h| h.to_string()));
+        rec.push(r.escape.map_or(String::new(), escape_label));
         w.write_record(&rec)?;
     }
     Ok(String::from_utf8(w.into_inner()?)?)

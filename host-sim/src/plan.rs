@@ -7,6 +7,7 @@
 use std::time::{Duration, Instant};
 
 use capp_core::avoidance::Clearance;
+use capp_core::escape::EscapeState;
 use capp_core::setpoint::Decimator;
 use capp_core::{Outcome, Phase, StepReport};
 
@@ -40,6 +41,8 @@ pub struct Row {
     pub constrained: Option<bool>,
     /// Step halvings (`None`: not known).
     pub halvings: Option<u8>,
+    /// What the dead-end escape was doing (`None`: not known).
+    pub escape: Option<EscapeState>,
     /// Whether this row is in the decimated setpoint stream.
     pub setpoint: bool,
 }
@@ -87,6 +90,7 @@ fn row(planner: &CorePlanner, report: &StepReport, waypoints: usize, setpoint: b
         },
         constrained: Some(report.constrained),
         halvings: Some(report.halvings),
+        escape: Some(report.escape),
         setpoint,
     }
 }

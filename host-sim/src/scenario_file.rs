@@ -169,6 +169,11 @@ struct SettingsSpec {
     stall_window: Option<u32>,
     stall_progress: Option<f64>,
     max_halvings: Option<u8>,
+    escape_attempts: Option<u8>,
+    escape_window: Option<u16>,
+    escape_walk_steps: Option<u16>,
+    escape_reach: Option<f64>,
+    escape_seed: Option<u32>,
 }
 
 #[derive(Deserialize)]
@@ -524,6 +529,19 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     settings.stall_progress = f(s.stall_progress, settings.stall_progress);
     if let Some(v) = s.max_halvings {
         settings.max_halvings = v;
+    }
+    if let Some(v) = s.escape_attempts {
+        settings.escape.attempts = v;
+    }
+    if let Some(v) = s.escape_window {
+        settings.escape.window = v;
+    }
+    if let Some(v) = s.escape_walk_steps {
+        settings.escape.walk_steps = v;
+    }
+    settings.escape.reach = f(s.escape_reach, settings.escape.reach);
+    if let Some(v) = s.escape_seed {
+        settings.escape.seed = v;
     }
 
     let setpoints = match file.output.and_then(|o| o.setpoints) {

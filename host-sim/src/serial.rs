@@ -313,6 +313,7 @@ fn derived_row(scenario: &CoreScenario, s: &capp_link::Setpoint, h: f32) -> Row 
         waypoint: s.waypoint,
         constrained: None,
         halvings: None,
+        escape: None,
         setpoint: true,
     }
 }

@@ -13,19 +13,28 @@
 //!    [`MEMORY`] entries. Stalling again where one was remembered (the end
 //!    effector within [`SAME_PLACE`] of the robot's reach, `V` no lower) is
 //!    falling back into it: the walks from there grow longer.
-//! 2. **Choose a walk**: [`CANDIDATES`] random joint configurations around the
-//!    current one, each joint moved by up to `reach` (growing with the visits)
-//!    of its range; a candidate that would approach the obstacles (`mu . dq >
-//!    0`) is mirrored to move away from them. The one whose end effector makes
-//!    the shortest detour to the target (current hand position to candidate
-//!    to target: the path that costs the least motion time, which is what a
-//!    user is judged on; the larger clearance is left to the projection) is
-//!    taken, and the side of the blocking obstacle it passes is reported.
-//! 3. **Walk** straight to it in joint space ([`crate::control::joint_space`]),
-//!    every step checked like any other, for at most
-//!    [`EscapeSettings::walk_steps`] steps or until it is reached or blocked.
+//! 2. **Detour** (the first tries at each dead end): when an obstacle of a
+//!    size comparable to the arm blocks (the closest pair's), the end
+//!    effector is sent to a point beside it: [`DETOURS`] points just outside
+//!    its inflated bounding box, across the direction from the hand to the
+//!    target, taken in order of the detour they make (hand to point to
+//!    target: the shortest first, since it costs the least motion time,
+//!    which is what a user is judged on; clearance is the projection's job).
+//!    The law drives there as to any target (position only), for at most
+//!    [`EscapeSettings::walk_steps`] steps, then turns back to the target.
+//! 3. **Walk** (once the detours are spent, or with no such obstacle):
+//!    [`CANDIDATES`] random joint configurations around the current one, each
+//!    joint moved by up to `reach` (growing with the visits) of its range; a
+//!    candidate that would approach the obstacles (`mu . dq > 0`) is mirrored
+//!    to move away from them. The one whose end effector makes the shortest
+//!    detour to the target is taken, and walked to straight in joint space
+//!    ([`crate::control::joint_space`]), every step checked like any other,
+//!    for at most [`EscapeSettings::walk_steps`] steps or until it is reached
+//!    or blocked.
 //! 4. **Descend** again with the law. Progress below the best `V` carries on
 //!    as normal; the next stall starts the next attempt.
+//!
+//! Either way the report names the side of the blocking obstacle taken.
 //!
 //! When the attempts are spent the planner walks back to the best
 //! configuration it found (the lowest `V`) and ends `Stalled` there. Every
@@ -33,7 +42,7 @@
 //! choosing a walk adds [`CANDIDATES`] forward kinematics passes.
 
 use crate::kinematics::{forward_kinematics, Frames};
-use crate::math::{max, min, Vec3};
+use crate::math::{max, min, norm, Vec3};
 use crate::obstacle::Obstacle;
 use crate::robot::Robot;
 
@@ -41,6 +50,13 @@ use crate::robot::Robot;
 pub const MEMORY: usize = 8;
 /// Walk candidates drawn at each attempt.
 pub const CANDIDATES: usize = 4;
+/// Detour points around a blocking obstacle (two axes across the blocked
+/// direction, both ways).
+pub const DETOURS: usize = 4;
+/// An obstacle is detoured around only when its inflated bounding box is
+/// smaller than this fraction of the robot's reach (a floor or a wall is
+/// not gone round).
+pub const DETOUR_SIZE: f32 = 0.5;
 /// Two dead ends are the same place when their end-effector positions are
 /// within this fraction of the robot's reach.
 pub const SAME_PLACE: f32 = 0.02;
@@ -102,6 +118,13 @@ pub enum EscapeState {
         /// Attempts made for the current waypoint.
         attempts: u8,
     },
+    /// Sending the end effector round the blocking obstacle.
+    Detouring {
+        /// Which attempt (1-based).
+        attempt: u8,
+        /// The side of the blocking obstacle taken.
+        side: Side,
+    },
     /// Walking away from a dead end.
     Walking {
         /// Which attempt (1-based).
@@ -119,6 +142,8 @@ struct DeadEnd {
     position: Vec3,
     v: f32,
     visits: u8,
+    /// Detours tried from here.
+    detours: u8,
 }
 
 /// The escape's fixed-size state, for `N` joints.
@@ -128,6 +153,8 @@ pub struct Escape<const N: usize> {
     state: EscapeState,
     /// The walk's goal (or the best configuration, when returning).
     goal: [f32; N],
+    /// The detour's point for the end effector.
+    subgoal: Vec3,
     /// Steps of the current walk, and of those without progress.
     walked: u16,
     idle: u16,
@@ -149,6 +176,7 @@ impl<const N: usize> Escape<N> {
             rng: 1,
             state: EscapeState::Descending { attempts: 0 },
             goal: [0.0; N],
+            subgoal: Vec3::zeros(),
             walked: 0,
             idle: 0,
             closest: f32::INFINITY,
@@ -169,6 +197,7 @@ impl<const N: usize> Escape<N> {
             rng,
             state,
             goal,
+            subgoal,
             walked,
             idle,
             closest,
@@ -188,6 +217,7 @@ impl<const N: usize> Escape<N> {
         *rng = if h == 0 { 0x9E37_79B9 } else { h };
         *state = EscapeState::Descending { attempts: 0 };
         goal.fill(0.0);
+        *subgoal = Vec3::zeros();
         *walked = 0;
         *idle = 0;
         *closest = f32::INFINITY;
@@ -219,8 +249,16 @@ impl<const N: usize> Escape<N> {
     /// The goal of the current walk (or of the return), when there is one.
     pub fn goal(&self) -> Option<&[f32; N]> {
         match self.state {
-            EscapeState::Descending { .. } => None,
-            _ => Some(&self.goal),
+            EscapeState::Walking { .. } | EscapeState::Returning => Some(&self.goal),
+            _ => None,
+        }
+    }
+
+    /// The end effector's point of the current detour, when there is one.
+    pub fn subgoal(&self) -> Option<Vec3> {
+        match self.state {
+            EscapeState::Detouring { .. } => Some(self.subgoal),
+            _ => None,
         }
     }
 
@@ -243,15 +281,15 @@ impl<const N: usize> Escape<N> {
         (x >> 8) as f32 * (2.0 / (1u32 << 24) as f32) - 1.0
     }
 
-    /// Remembers a dead end at `position` with `v`; returns how often the
-    /// arm has now been there.
-    fn remember(&mut self, position: Vec3, v: f32, reach: f32) -> u8 {
+    /// Remembers a dead end at `position` with `v`; returns its slot (whose
+    /// `visits` counts how often the arm has now been there).
+    fn remember(&mut self, position: Vec3, v: f32, reach: f32) -> usize {
         let near = SAME_PLACE * reach;
         let count = (self.remembered as usize).min(MEMORY);
-        for d in self.memory[..count].iter_mut() {
+        for (i, d) in self.memory[..count].iter_mut().enumerate() {
             if (d.position - position).norm_squared() <= near * near && v >= d.v * 0.99 {
                 d.visits = d.visits.saturating_add(1);
-                return d.visits;
+                return i;
             }
         }
         let slot = (self.next_slot as usize) % MEMORY;
@@ -259,15 +297,17 @@ impl<const N: usize> Escape<N> {
             position,
             v,
             visits: 1,
+            detours: 0,
         };
         self.next_slot = ((slot + 1) % MEMORY) as u8;
         self.remembered = (count + 1).min(MEMORY) as u8;
-        1
+        slot
     }
 
     /// The law stalled at `q` (frames `frames`, value `v`, obstacle gradient
-    /// `mu`, closest pair's obstacle `blocking`), aiming at `target`. Starts
-    /// the next walk and returns `true`, or, the attempts spent, starts the
+    /// `mu`, closest pair's obstacle `blocking`), aiming at `target`, the arm
+    /// kept `margin` (length units) off the obstacles. Starts the next
+    /// detour or walk and returns `true`, or, the attempts spent, starts the
     /// return to the best configuration and returns `false`. `scratch` is
     /// overwritten (forward kinematics of the candidates).
     #[allow(clippy::too_many_arguments)]
@@ -282,6 +322,7 @@ impl<const N: usize> Escape<N> {
         mu: &[f32],
         blocking: Option<u8>,
         target: Vec3,
+        margin: f32,
         scratch: &mut Frames<N>,
     ) -> bool {
         let attempts = match self.state {
@@ -295,7 +336,28 @@ impl<const N: usize> Escape<N> {
             self.start_walk(EscapeState::Returning);
             return false;
         }
-        let visits = self.remember(hand, v, robot.reach());
+        let slot = self.remember(hand, v, robot.reach());
+        let dead_end = self.memory.get(slot).copied().unwrap_or_default();
+        // Round the blocking obstacle first, if it is one to go round.
+        if let Some((o, obstacle)) = blocking.and_then(|o| Some((o, obstacles.get(o as usize)?))) {
+            let tried = dead_end.detours as usize;
+            if tried < DETOURS {
+                if let Some((point, side)) =
+                    detour(obstacle, o, hand, target, tried, robot.reach(), margin)
+                {
+                    if let Some(d) = self.memory.get_mut(slot) {
+                        d.detours += 1;
+                    }
+                    self.subgoal = point;
+                    self.start_walk(EscapeState::Detouring {
+                        attempt: attempts + 1,
+                        side,
+                    });
+                    return true;
+                }
+            }
+        }
+        let visits = dead_end.visits.saturating_sub(dead_end.detours).max(1);
         let reach = min(settings.reach * (1.0 + 0.5 * (visits as f32 - 1.0)), 1.0);
         let mut best = f32::INFINITY;
         let mut candidate = [0.0f32; N];
@@ -317,7 +379,7 @@ impl<const N: usize> Escape<N> {
             }
             forward_kinematics(robot, &candidate[..n], scratch);
             let end = scratch.end_position();
-            let detour = (end - hand).norm() + (target - end).norm();
+            let detour = norm(&(end - hand)) + norm(&(target - end));
             if detour < best {
                 best = detour;
                 self.goal[..n].copy_from_slice(&candidate[..n]);
@@ -342,32 +404,104 @@ impl<const N: usize> Escape<N> {
         self.closest = f32::INFINITY;
     }
 
-    /// After a step of a walk (or of the return) that left the joints `gap`
-    /// seconds (at the rate limits) from the goal: whether the walk is over
-    /// (reached, blocked, or out of steps). A finished walk hands back to the
-    /// law (`Descending`); a finished return is the end of the run.
-    pub fn walked(&mut self, settings: &EscapeSettings, gap: f32, time_step_s: f32) -> bool {
+    /// After a step of a walk, a return or a detour that left it `gap` from
+    /// its goal (seconds at the rate limits for walks, length units for a
+    /// detour, whose goal counts as reached within `reached`): whether it is
+    /// over (reached, blocked, or out of steps). A finished walk or detour
+    /// hands back to the law (`Descending`); a finished return is the end of
+    /// the run.
+    pub fn walked(&mut self, settings: &EscapeSettings, gap: f32, reached: f32) -> bool {
         self.walked = self.walked.saturating_add(1);
-        if gap < self.closest * 0.99 {
+        // Progress: a tenth of the goal tolerance closer than ever before.
+        if gap < self.closest - 0.1 * reached {
             self.closest = gap;
             self.idle = 0;
         } else {
             self.idle = self.idle.saturating_add(1);
         }
-        let returning = self.state == EscapeState::Returning;
-        let limit = if returning {
-            settings.walk_steps.saturating_mul(2)
-        } else {
-            settings.walk_steps
+        let (limit, patience) = match self.state {
+            EscapeState::Returning => (settings.walk_steps.saturating_mul(2), WALK_PATIENCE),
+            // The law slows near the point; give it the stall window.
+            EscapeState::Detouring { .. } => (settings.walk_steps, settings.window),
+            _ => (settings.walk_steps, WALK_PATIENCE),
         };
-        let over = gap <= 0.01 * time_step_s || self.idle >= WALK_PATIENCE || self.walked >= limit;
+        let over = gap <= reached || self.idle >= patience || self.walked >= limit;
         if over {
-            if let EscapeState::Walking { attempt, .. } = self.state {
-                self.state = EscapeState::Descending { attempts: attempt };
+            match self.state {
+                EscapeState::Walking { attempt, .. } | EscapeState::Detouring { attempt, .. } => {
+                    self.state = EscapeState::Descending { attempts: attempt };
+                }
+                _ => {}
             }
         }
         over
     }
+}
+
+/// The `which`-th best (shortest) detour round `obstacle` (index `index`)
+/// for a hand at `hand` aiming at `target`: a point `margin` plus 5 % of
+/// `reach` outside the obstacle's inflated bounding box, beside it across
+/// the blocked direction; `None` for an obstacle too big to go round.
+fn detour(
+    obstacle: &Obstacle,
+    index: u8,
+    hand: Vec3,
+    target: Vec3,
+    which: usize,
+    reach: f32,
+    margin: f32,
+) -> Option<(Vec3, Side)> {
+    let axes = obstacle.source().semi_axes;
+    let rotation = obstacle.rotation();
+    let size = libm::sqrtf(axes.iter().map(|a| a * a).sum::<f32>()) + margin;
+    if size > DETOUR_SIZE * reach {
+        return None;
+    }
+    let centre = obstacle.centre();
+    let mut blocked = target - hand;
+    if blocked.norm_squared() <= f32::MIN_POSITIVE {
+        blocked = centre - hand;
+    }
+    let d = blocked / norm(&blocked);
+    // Two directions across d: away from the world z axis unless d is it.
+    let helper = if d.z.abs() < 0.9 {
+        Vec3::z()
+    } else {
+        Vec3::x()
+    };
+    let across = d.cross(&helper);
+    let e1 = across / norm(&across);
+    let e2 = d.cross(&e1);
+    let mut points = [(f32::INFINITY, Vec3::zeros()); DETOURS];
+    for (k, slot) in points.iter_mut().enumerate() {
+        let u = match k {
+            0 => e1,
+            1 => -e1,
+            2 => e2,
+            _ => -e2,
+        };
+        // Support of the inflated box in direction u.
+        let local = rotation.transpose() * u;
+        let extent: f32 = local
+            .iter()
+            .zip(axes)
+            .map(|(l, a)| l.abs() * (a + margin))
+            .sum();
+        let point = centre + u * (extent + margin + 0.05 * reach);
+        *slot = (norm(&(point - hand)) + norm(&(target - point)), point);
+    }
+    // The which-th shortest (a tiny selection sort over four).
+    for i in 0..DETOURS {
+        for j in i + 1..DETOURS {
+            if points[j].0 < points[i].0 {
+                points.swap(i, j);
+            }
+        }
+    }
+    let (length, point) = *points.get(which)?;
+    length
+        .is_finite()
+        .then(|| (point, side_of(obstacle, index, point)))
 }
 
 /// The side of `obstacle` (index `index`) that `point` is on.

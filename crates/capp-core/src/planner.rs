@@ -33,7 +33,7 @@ use crate::control::joint_space::joint_rate;
 use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
 use crate::escape::{Escape, EscapeState};
 use crate::kinematics::{forward_kinematics, Frames};
-use crate::math::all_finite;
+use crate::math::{all_finite, norm};
 use crate::mission::Settings;
 use crate::projection::{approach, retreat, strength, Guard};
 use crate::robot::Robot;
@@ -49,6 +49,9 @@ pub const CONTACT_FLOOR: f32 = 0.01;
 /// Pose error, as a fraction of the robot's reach, below which a stall is
 /// `f32` rounding, not a dead end: no escape is tried.
 pub const NUMERIC_FLOOR: f32 = 1.0e-5;
+
+/// A detour's point counts as reached within this fraction of the reach.
+pub const DETOUR_RADIUS: f32 = 0.01;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -475,7 +478,14 @@ impl<const N: usize> Planner<N> {
         let settings = scenario.settings();
         let targets = scenario.targets();
         while let Phase::Moving { waypoint } = self.phase {
-            let e = &self.now.error;
+            // While detouring, `now.error` is the detour point's; the
+            // waypoint is judged by its own.
+            let e = match (self.escape.subgoal(), targets.get(waypoint as usize)) {
+                (Some(_), Some(target)) => {
+                    pose_error(&self.now.frames, target, settings.law.orientation_scale)
+                }
+                _ => self.now.error,
+            };
             let within = e.position <= settings.position_tolerance
                 && (!e.has_orientation || e.orientation <= settings.orientation_tolerance);
             if !within {
@@ -538,32 +548,37 @@ impl<const N: usize> Planner<N> {
             &self.now.mu[..n],
             self.now.field.clearance.map(|c| c.obstacle),
             target.position,
+            settings.avoidance.joint_margin,
             &mut self.next.frames,
         );
     }
 
-    /// After a step of a walk: is it over? A finished walk hands back to the
-    /// law with a fresh stall window; a finished return ends `Stalled`.
-    fn after_walk(&mut self, settings: &Settings, robot: &Robot<N>) {
+    /// After a step of a walk or a detour: is it over? A finished walk or
+    /// detour hands back to the law (toward `target`) with a fresh stall
+    /// window; a finished return ends `Stalled`.
+    fn after_escape_step(&mut self, settings: &Settings, robot: &Robot<N>, target: &Target) {
         let n = self.n.min(N);
-        let Some(goal) = self.escape.goal() else {
+        let (gap, reached) = if let Some(point) = self.escape.subgoal() {
+            let radius = DETOUR_RADIUS * robot.reach();
+            (norm(&(point - self.now.frames.end_position())), radius)
+        } else if let Some(goal) = self.escape.goal() {
+            let mut gap = 0.0f32;
+            for ((joint, &qj), &gj) in robot.joints().iter().zip(&self.q[..n]).zip(&goal[..n]) {
+                gap = crate::math::max(gap, (gj - qj).abs() / joint.max_rate);
+            }
+            (gap, 0.1 * settings.time_step_s)
+        } else {
             return;
         };
         let returning = self.escape.state() == EscapeState::Returning;
-        let mut gap = 0.0f32;
-        for ((joint, &qj), &gj) in robot.joints().iter().zip(&self.q[..n]).zip(&goal[..n]) {
-            gap = crate::math::max(gap, (gj - qj).abs() / joint.max_rate);
-        }
-        if self
-            .escape
-            .walked(&settings.escape, gap, settings.time_step_s)
-        {
+        if self.escape.walked(&settings.escape, gap, reached) {
             if returning {
                 self.phase = Phase::Done(Outcome::Stalled);
-            } else {
-                self.best_v = self.now.error.v;
-                self.best_step = self.step;
             }
+            // Back to the target: its error, and a fresh stall window.
+            self.now.error = pose_error(&self.now.frames, target, settings.law.orientation_scale);
+            self.best_v = self.now.error.v;
+            self.best_step = self.step;
         }
     }
 
@@ -599,6 +614,23 @@ impl<const N: usize> Planner<N> {
             self.last = self.report(0.0, false, 0);
             return Ok(self.last);
         }
+        // What the law drives to: the target, or a detour's point beside the
+        // obstacle that blocked it (position only).
+        let detour = self.escape.subgoal();
+        let drive_target = match detour {
+            Some(point) => Target {
+                position: point,
+                orientation: None,
+            },
+            None => target,
+        };
+        if detour.is_some() {
+            self.now.error = pose_error(
+                &self.now.frames,
+                &drive_target,
+                settings.law.orientation_scale,
+            );
+        }
 
         // The law proposes a rate and a step (eqs. 13-18, 24).
         let engage = strength(
@@ -622,6 +654,7 @@ impl<const N: usize> Planner<N> {
             ),
         };
         let walking = self.escape.goal().is_some();
+        let escaping = walking || detour.is_some();
         let (drive, constrained, mut h) = match (self.escape.goal(), &mut self.law) {
             // Escaping: straight to the walk's goal in joint space.
             (Some(goal), _) => {
@@ -700,7 +733,8 @@ impl<const N: usize> Planner<N> {
                     let joint = &robot.joints()[j];
                     self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
                 }
-                self.next.evaluate(scenario, &self.q_next[..n], &target);
+                self.next
+                    .evaluate(scenario, &self.q_next[..n], &drive_target);
                 // Clear, and not creeping onto a surface: below the contact
                 // floor the closest clearance may not shrink further.
                 let closest =
@@ -732,8 +766,8 @@ impl<const N: usize> Planner<N> {
         }
 
         // Progress and outcome.
-        if walking {
-            self.after_walk(&settings, robot);
+        if escaping {
+            self.after_escape_step(&settings, robot, &target);
         } else {
             if self.now.error.v < self.best_v * (1.0 - settings.stall_progress) {
                 self.best_v = self.now.error.v;
@@ -743,7 +777,7 @@ impl<const N: usize> Planner<N> {
         }
         self.pass_waypoints(scenario);
         if let Phase::Moving { .. } = self.phase {
-            if !walking && self.stalled(&settings) {
+            if !escaping && self.stalled(&settings) {
                 self.on_stall(scenario, &target);
             }
             if self.step >= settings.max_steps && !self.is_done() {
@@ -751,6 +785,13 @@ impl<const N: usize> Planner<N> {
             }
         }
         self.last = self.report(h, constrained, halvings);
+        if self.escape.subgoal().is_some() {
+            // Report the target's errors, not the detour point's.
+            let e = pose_error(&self.now.frames, &target, settings.law.orientation_scale);
+            self.last.v = e.v;
+            self.last.position_error = e.position;
+            self.last.orientation_error = e.orientation;
+        }
         Ok(self.last)
     }
 
