@@ -72,7 +72,8 @@ pub struct EscapeSettings {
     /// the run after `stall_window` steps, as before).
     pub attempts: u8,
     /// Steps without a new low of `V` (by `stall_progress`) that make a dead
-    /// end, at least 1.
+    /// end under the damped law, at least 1 (the first-order laws, which
+    /// creep, use `stall_window`).
     pub window: u16,
     /// Most steps of one walk, at least 1.
     pub walk_steps: u16,

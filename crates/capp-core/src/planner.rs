@@ -513,9 +513,12 @@ impl<const N: usize> Planner<N> {
     }
 
     /// Whether the law has made no progress for long enough to call it a
-    /// dead end: the escape's window, or (escapes off) the stall window.
+    /// dead end: the escape's window for the damped law, which converges in
+    /// tens of steps; the stall window for the first-order laws, which creep
+    /// (and for every law with escapes off).
     fn stalled(&self, settings: &Settings) -> bool {
-        let window = if settings.escape.attempts > 0 {
+        let fast = settings.law.kind == LawKind::DampedLeastSquares;
+        let window = if settings.escape.attempts > 0 && fast {
             settings.escape.window as u32
         } else {
             settings.stall_window

@@ -136,11 +136,13 @@ fn load_commands_with(settings: capp_core::Settings) -> Vec<Command> {
     commands
 }
 
-/// Settings for a plan of a thousand steps or so (the first-order gradient
-/// law): long enough for a host to send many commands while it runs.
+/// Settings for a plan of a couple of thousand steps (the first-order
+/// gradient law, in quarter steps): long enough for a host to send many
+/// commands while it runs.
 fn long_plan() -> capp_core::Settings {
     let mut s = capp_core::Settings::default();
     s.law.kind = capp_core::control::LawKind::Gradient;
+    s.time_step_s *= 0.25;
     s
 }
 

@@ -220,11 +220,17 @@ fn run(design: Design) -> Outcome {
             Design::Polled => node.poll(&mut uart),
             Design::Interrupt => node.poll_queue(&mut uart, &mut consumer, &counters),
         }
-        // A tick: one planner step, during which no loop code runs.
+        // A tick: one planner step, during which no loop code runs (a tick
+        // with no plan running returns at once).
         let busy = if now >= next_tick {
             next_tick += TICK;
+            let stepping = node.status().state == State::Running;
             node.tick(1);
-            STEP
+            if stepping {
+                STEP
+            } else {
+                1
+            }
         } else {
             1
         };
