@@ -185,6 +185,7 @@ impl<const N: usize> PhaseBench<N> {
             robot,
             &self.frames,
             &self.distance_sq[..n],
+            self.field.nearest.as_ref(),
             &self.rate[..n],
             h,
             settings.avoidance.advance_fraction,

@@ -22,7 +22,7 @@
 //! at fraction `t` of the sliding link moves `t` as far as its end).
 
 use crate::kinematics::Frames;
-use crate::math::{min, Vec3};
+use crate::math::{min, norm, Vec3};
 use crate::obstacle::{Obstacle, PointKind};
 use crate::robot::{JointKind, Robot};
 
@@ -144,6 +144,32 @@ pub struct Clearance {
     pub obstacle: u8,
 }
 
+/// The nearest avoidance point / obstacle pair of the arm, as a half-space:
+/// every point `y` with `normal . y > offset` is outside that obstacle
+/// inflated by the joint margin (so by either margin). From the convexity of
+/// `C`: `C(y) >= C(p) + grad C(p) . (y - p)`, which exceeds 1 wherever
+/// `grad C . (y - p) > 1 - C(p)`. Conservative advancement
+/// ([`crate::step_size::advancement`]) lets that link slide along the
+/// obstacle or move away from it, where a bound on its travel alone would
+/// hold it still.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct HalfSpace {
+    /// The link (0-based joint) the nearest point is on.
+    pub link: u8,
+    /// Outward unit normal (world frame).
+    pub normal: Vec3Data,
+    /// The half-space is `normal . y > offset`, length units.
+    pub offset: f32,
+    /// Square of the lower bound on the distance from that link's points to
+    /// every *other* obstacle (the influence distance's square if none is
+    /// within it), length units squared.
+    pub others_sq: f32,
+}
+
+/// A plain `[x, y, z]` (so that [`HalfSpace`] can derive `defmt::Format`).
+pub type Vec3Data = [f32; 3];
+
 /// What the obstacles say about one configuration.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ObstacleField {
@@ -155,6 +181,8 @@ pub struct ObstacleField {
     pub active_pairs: u16,
     /// Whether every point is strictly outside every inflated obstacle.
     pub clear: bool,
+    /// The nearest pair's half-space, when it has one.
+    pub nearest: Option<HalfSpace>,
 }
 
 /// Evaluates the potential and writes `mu = dP/dq` into `mu` (`frames.len()`
@@ -185,19 +213,34 @@ pub fn potential_gradient<const N: usize>(
     } else {
         settings.influence_distance * settings.influence_distance
     };
+    // The nearest pair of the arm: link, point id, obstacle, and that link's
+    // distance to every other obstacle.
+    let mut nearest: Option<(u8, u16, u8, f32)> = None;
+    let mut nearest_sq = influence_sq;
     for j in (0..n).rev() {
         let pivot = frames.pivot(j);
         moment += (frames.origin(j) - pivot).cross(&force);
         let beyond = force;
         let mut sliding_force = Vec3::zeros();
-        let mut link_distance_sq = influence_sq;
+        // The link's nearest pair (distance, obstacle, point) and its
+        // distance to the other obstacles.
+        let (mut link_sq, mut link_obstacle, mut link_point) = (influence_sq, u8::MAX, 0u16);
+        let mut others_sq = influence_sq;
         for point in link_points(frames, settings, j) {
             let mut f = Vec3::zeros();
             for (index, obstacle) in obstacles.iter().enumerate() {
                 let Some(contact) = obstacle.contact(&point.position, point.kind) else {
                     continue;
                 };
-                link_distance_sq = min(link_distance_sq, contact.distance_sq);
+                let index = index as u8;
+                if contact.distance_sq < link_sq {
+                    if index != link_obstacle {
+                        others_sq = link_sq;
+                    }
+                    (link_sq, link_obstacle, link_point) = (contact.distance_sq, index, point.id);
+                } else if index != link_obstacle {
+                    others_sq = min(others_sq, contact.distance_sq);
+                }
                 if contact.clearance == f32::INFINITY {
                     // Beyond the potential's cut-off: only the distance counts.
                     continue;
@@ -207,7 +250,7 @@ pub fn potential_gradient<const N: usize>(
                     field.clearance = Some(Clearance {
                         value: contact.clearance,
                         point: point.id,
-                        obstacle: index as u8,
+                        obstacle: index,
                     });
                 }
                 if contact.clearance <= 0.0 {
@@ -222,7 +265,11 @@ pub fn potential_gradient<const N: usize>(
             moment += (point.position - pivot).cross(&f);
             sliding_force += f * point.t;
         }
-        distance_sq[j] = link_distance_sq;
+        distance_sq[j] = link_sq;
+        if link_sq < nearest_sq && link_obstacle != u8::MAX {
+            nearest_sq = link_sq;
+            nearest = Some((j as u8, link_point, link_obstacle, others_sq));
+        }
         let z = frames.axis(j);
         // `get`, not `[j]`: no panic path (the frames are the robot's, so it is always `Some`).
         mu[j] = match robot.joints().get(j).map(|joint| joint.kind) {
@@ -230,5 +277,43 @@ pub fn potential_gradient<const N: usize>(
             _ => z.dot(&moment),
         };
     }
+    field.nearest = nearest.and_then(|(link, point, obstacle, others_sq)| {
+        half_space(
+            frames, obstacles, settings, link, point, obstacle, others_sq,
+        )
+    });
     field
+}
+
+/// The half-space of [`HalfSpace`] at avoidance point `point` (on `link`)
+/// against `obstacle`, or `None` when the point is inside that obstacle's
+/// joint-margin inflation (no such half-space) or out of its influence.
+fn half_space<const N: usize>(
+    frames: &Frames<N>,
+    obstacles: &[Obstacle],
+    settings: &AvoidanceSettings,
+    link: u8,
+    point: u16,
+    obstacle: u8,
+    others_sq: f32,
+) -> Option<HalfSpace> {
+    let per = settings.points_per_link_total();
+    let index = (point as usize).checked_sub(link as usize * per)?;
+    let p = link_points(frames, settings, link as usize)
+        .nth(index)?
+        .position;
+    let contact = obstacles
+        .get(obstacle as usize)?
+        .contact(&p, PointKind::Joint)?;
+    let slope = norm(&contact.gradient);
+    if !(contact.clearance > 0.0 && contact.clearance.is_finite() && slope > 0.0) {
+        return None;
+    }
+    let normal = contact.gradient / slope;
+    Some(HalfSpace {
+        link,
+        normal: [normal.x, normal.y, normal.z],
+        offset: normal.dot(&p) - contact.clearance / slope,
+        others_sq,
+    })
 }

@@ -87,9 +87,9 @@ pub struct EscapeSettings {
 impl Default for EscapeSettings {
     fn default() -> Self {
         EscapeSettings {
-            attempts: 12,
+            attempts: 40,
             window: 40,
-            walk_steps: 40,
+            walk_steps: 120,
             reach: 0.25,
             seed: 0x2545_F491,
         }

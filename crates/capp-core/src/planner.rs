@@ -722,6 +722,7 @@ impl<const N: usize> Planner<N> {
             robot,
             &self.now.frames,
             &self.now.distance_sq[..n],
+            self.now.field.nearest.as_ref(),
             &self.rate[..n],
             h,
             settings.avoidance.advance_fraction,

@@ -38,9 +38,10 @@
 //! bound of [`crate::obstacle::Contact::distance_sq`] (it holds for every
 //! convex `C`), or the influence distance for a link no obstacle is near.
 
+use crate::avoidance::HalfSpace;
 use crate::control::PoseError;
 use crate::kinematics::Frames;
-use crate::math::{max, Vec3};
+use crate::math::{max, min, Vec3};
 use crate::mission::Settings;
 use crate::robot::{JointKind, Robot};
 
@@ -99,6 +100,13 @@ pub fn stiffness_bound(stiffness: f32) -> f32 {
 /// obstacle distance (`distance_sq`, its square, one per link) when the
 /// joints move by `h' rate`. `rate` and `distance_sq` hold one value per joint.
 ///
+/// The link of the `nearest` pair, when its whole segment is inside that
+/// pair's half-space, is bounded more finely: against that obstacle only the
+/// motion *toward* it counts (`-normal . v` at either end, against each end's
+/// room to the plane); against the others its travel, within `others_sq`. So
+/// an arm pressed on a surface can slide along it or leave it, which a bound
+/// on travel alone would not let it do.
+///
 /// Square roots only where a link might be bound: `(a + b)^2 <= 2 (a^2 + b^2)`
 /// settles most links in squares (a software square root is some forty
 /// instructions on a Cortex-M4F).
@@ -106,6 +114,7 @@ pub fn advancement<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
     distance_sq: &[f32],
+    nearest: Option<&HalfSpace>,
     rate: &[f32],
     h: f32,
     fraction: f32,
@@ -117,7 +126,7 @@ pub fn advancement<const N: usize>(
     let mut phi = 0.0f32;
     let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
     let mut pivot_chain = 0.0f32;
-    let mut start_speed_sq = 0.0f32;
+    let mut start_v = Vec3::zeros();
     let mut scale = 1.0f32;
     let fraction_sq = fraction * fraction;
     for (j, ((joint, link), (&r, &d_sq))) in robot
@@ -145,22 +154,21 @@ pub fn advancement<const N: usize>(
             }
         }
         pivot_chain = link.chain;
-        let v = w.cross(&frames.origin(j)) + b;
-        let end_speed_sq = v.dot(&v);
-        let first_sq = max(start_speed_sq, end_speed_sq);
-        start_speed_sq = end_speed_sq;
+        let end_v = w.cross(&frames.origin(j)) + b;
+        let first_sq = max(start_v.norm_squared(), end_v.norm_squared());
         let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
-        let allowed_sq = fraction_sq * d_sq;
-        if 2.0 * (first_sq + second * second) <= allowed_sq {
-            continue;
-        }
-        let first = libm::sqrtf(first_sq);
-        let allowed = libm::sqrtf(allowed_sq);
-        // s first + s^2 second = allowed.
-        let root = libm::sqrtf(first * first + 4.0 * second * allowed);
-        let s = 2.0 * allowed / (first + root);
-        if s < scale {
-            scale = s;
+        let pressed = nearest.filter(|h| h.link as usize == j);
+        let (v0, v1) = (start_v, end_v);
+        start_v = end_v;
+        match pressed.and_then(|h| sliding_bound(h, frames, j, v0, v1, second, fraction)) {
+            Some((s_toward, others_sq)) => {
+                scale = min(scale, s_toward);
+                scale = min(
+                    scale,
+                    travel_bound(first_sq, second, fraction_sq * others_sq),
+                );
+            }
+            None => scale = min(scale, travel_bound(first_sq, second, fraction_sq * d_sq)),
         }
     }
     if scale.is_finite() {
@@ -168,4 +176,59 @@ pub fn advancement<const N: usize>(
     } else {
         0.0
     }
+}
+
+/// The largest `s <= 1` with `s first + s^2 second <= allowed` (first and
+/// allowed given squared): 1 when the step fits, settled in squares when
+/// `(a + b)^2 <= 2 (a^2 + b^2)` shows it.
+fn travel_bound(first_sq: f32, second: f32, allowed_sq: f32) -> f32 {
+    if 2.0 * (first_sq + second * second) <= allowed_sq {
+        return 1.0;
+    }
+    let first = libm::sqrtf(first_sq);
+    let allowed = libm::sqrtf(allowed_sq);
+    largest_s(first, second, allowed)
+}
+
+/// `s first + s^2 second = allowed` solved for `s`, at most 1 (0 when
+/// nothing is allowed).
+fn largest_s(first: f32, second: f32, allowed: f32) -> f32 {
+    if allowed <= 0.0 || allowed.is_nan() {
+        return 0.0;
+    }
+    if first + second <= allowed {
+        return 1.0;
+    }
+    let root = libm::sqrtf(first * first + 4.0 * second * allowed);
+    2.0 * allowed / (first + root)
+}
+
+/// For the link `j` of the nearest pair's half-space `h`, with its ends
+/// moving `v0` (pivot) and `v1` (end) per unit `s` and second-order travel
+/// `second`: the largest `s` for which neither end comes more than
+/// `fraction` of its room closer to the plane, and the squared distance left
+/// to check the other obstacles against. `None` when an end is not inside
+/// the half-space (the travel bound must do).
+fn sliding_bound<const N: usize>(
+    h: &HalfSpace,
+    frames: &Frames<N>,
+    j: usize,
+    v0: Vec3,
+    v1: Vec3,
+    second: f32,
+    fraction: f32,
+) -> Option<(f32, f32)> {
+    let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
+    let mut s = 1.0f32;
+    for (x, v) in [(frames.pivot(j), v0), (frames.origin(j), v1)] {
+        let room = normal.dot(&x) - h.offset;
+        if room <= 0.0 || room.is_nan() {
+            return None;
+        }
+        s = min(
+            s,
+            largest_s(max(-normal.dot(&v), 0.0), second, fraction * room),
+        );
+    }
+    Some((s, h.others_sq))
 }
