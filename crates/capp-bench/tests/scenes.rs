@@ -50,7 +50,8 @@ fn listing_differences_match_the_exact_products() {
         .iter()
         .map(|o| *o.source())
         .collect();
-    let mission = capp_core::Mission::new(base.scenario.waypoints(), settings).unwrap();
+    let waypoints: Vec<_> = base.scenario.waypoints().collect();
+    let mission = capp_core::Mission::new(&waypoints, settings).unwrap();
     let scenario =
         capp_core::Scenario::<18, 64, 1>::new(base.scenario.robot().clone(), &obstacles, &mission)
             .unwrap();

@@ -364,19 +364,19 @@ impl<const N: usize> Escape<N> {
         let mut candidate = [0.0f32; N];
         for _ in 0..CANDIDATES {
             let mut toward = 0.0f32;
-            for ((c, joint), m) in candidate
-                .iter_mut()
-                .zip(robot.joints())
-                .zip(mu.iter().chain(core::iter::repeat(&0.0)))
-            {
+            for (j, joint) in robot.joints().iter().enumerate() {
                 let step = reach * self.uniform() * (joint.max - joint.min);
-                *c = step;
-                toward += m * step;
+                if let Some(c) = candidate.get_mut(j) {
+                    *c = step;
+                }
+                toward += mu.get(j).copied().unwrap_or(0.0) * step;
             }
             // Away from the obstacles, not into them.
             let sign = if toward > 0.0 { -1.0 } else { 1.0 };
-            for ((c, joint), &qj) in candidate.iter_mut().zip(robot.joints()).zip(q) {
-                *c = joint.clamp(qj + sign * *c);
+            for (j, (joint, &qj)) in robot.joints().iter().zip(q).enumerate() {
+                if let Some(c) = candidate.get_mut(j) {
+                    *c = joint.clamp(qj + sign * *c);
+                }
             }
             forward_kinematics(robot, &candidate[..n], scratch);
             let end = scratch.end_position();

@@ -145,9 +145,6 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
 
 /// `J_p^T f` for a force `f` at the end effector: `out[j] = z_j . ((p - o_j) x f)`
 /// (revolute) or `z_j . f` (prismatic). `out` must hold `frames.len()` values.
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn end_point_force<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -166,9 +163,6 @@ pub fn end_point_force<const N: usize>(
 
 /// `J_u^T e` for an error `e` on the end-effector direction `u` (a column of
 /// its rotation): `out[j] = z_j . (u x e)` (revolute) or `0` (prismatic).
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn end_direction_error<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -188,9 +182,6 @@ pub fn end_direction_error<const N: usize>(
 /// End-effector twist for a joint rate: linear velocity `v = sum_j qdot_j dp/dq_j`
 /// (length units per second) and angular velocity `w = sum_revolute qdot_j z_j`
 /// (radians per second). O(n); `J qdot` without forming `J`.
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn end_twist<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -216,9 +207,6 @@ pub fn end_twist<const N: usize>(
 /// `|dp/dq_j|^2 + lambda^2 sum_i |du_i/dq_j|^2` = `|z x (p - o)|^2 + 2 lambda^2`
 /// (revolute) or `1` (prismatic). Their gain-weighted sum bounds the largest
 /// eigenvalue of `J M J^T` (it is its trace). O(n).
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn column_sizes<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,

@@ -44,10 +44,6 @@
 //! * Work per [`planner::Planner::step`] is bounded by the joint, point and
 //!   obstacle counts (and a fixed number of step halvings); no loop depends on
 //!   the data's values.
-//! * Flash is a budget too (96 KiB on the boards): the first-order laws'
-//!   helpers and [`planner::Planner::step`] are kept out of line
-//!   (`#[inline(never)]`), since LLVM unrolls their loops for up to `N` joints
-//!   at every call site; the default law's hot path stays inlined.
 //! * Every transcendental goes through `libm` or [`math::sin_cos`] (plain `f32`
 //!   operations, which round alike everywhere), so the same inputs give the
 //!   same bits on the host and on a Cortex-M4F.

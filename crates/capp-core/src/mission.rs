@@ -233,6 +233,38 @@ pub enum MissionError {
     },
     /// A setting is out of its range.
     BadSetting(SettingsField),
+    /// A joint-space waypoint was refused.
+    BadJointGoal {
+        /// The waypoint (0-based).
+        waypoint: u8,
+        /// Why.
+        problem: JointGoalProblem,
+    },
+}
+
+/// What is wrong with a joint-space waypoint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum JointGoalProblem {
+    /// There is no waypoint with that index.
+    NoSuchWaypoint,
+    /// Not one value per joint.
+    WrongLength,
+    /// A value is not finite or outside its joint's limits.
+    OutsideLimits,
+    /// More than [`crate::scenario::MAX_JOINT_GOALS`].
+    TooMany,
+}
+
+impl core::fmt::Display for JointGoalProblem {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            JointGoalProblem::NoSuchWaypoint => "there is no such waypoint",
+            JointGoalProblem::WrongLength => "not one value per joint",
+            JointGoalProblem::OutsideLimits => "a value is not finite or outside its limits",
+            JointGoalProblem::TooMany => "more joint-space waypoints than the capacity",
+        })
+    }
 }
 
 impl core::fmt::Display for MissionError {
@@ -253,6 +285,13 @@ impl core::fmt::Display for MissionError {
                 waypoint as u32 + 1
             ),
             MissionError::BadSetting(field) => write!(f, "bad setting: {field}"),
+            MissionError::BadJointGoal { waypoint, problem } => {
+                write!(
+                    f,
+                    "waypoint {}: joint configuration: {problem}",
+                    waypoint as u32 + 1
+                )
+            }
         }
     }
 }

@@ -29,7 +29,7 @@
 use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
 use crate::control::damped::damped_rate;
 use crate::control::first_order::first_order_rate;
-use crate::control::joint_space::joint_rate;
+use crate::control::joint_space::{gap, joint_rate, joint_v};
 use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
 use crate::escape::{Escape, EscapeState};
 use crate::kinematics::{forward_kinematics, Frames};
@@ -52,6 +52,10 @@ pub const NUMERIC_FLOOR: f32 = 1.0e-5;
 
 /// A detour's point counts as reached within this fraction of the reach.
 pub const DETOUR_RADIUS: f32 = 0.01;
+
+/// A joint goal is passed when the joints are within this fraction of a
+/// time step of it at their rate limits.
+pub const JOINT_GOAL_TOLERANCE: f32 = 0.05;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,6 +172,22 @@ pub struct StepReport {
     pub escape: EscapeState,
 }
 
+/// The error from `target` of the arm at `q` (frames `frames`): the pose
+/// error (eqs. 11-12); for a joint goal, with `V` the joint-space distance
+/// ([`joint_v`]).
+fn target_error<const N: usize, const M: usize, const W: usize>(
+    scenario: &Scenario<N, M, W>,
+    frames: &Frames<N>,
+    q: &[f32],
+    target: &Target,
+) -> PoseError {
+    let mut e = pose_error(frames, target, scenario.settings().law.orientation_scale);
+    if let Some(goal) = target.joints.and_then(|k| scenario.joint_goal(k)) {
+        e.v = joint_v(scenario.robot(), q, goal);
+    }
+    e
+}
+
 /// Everything known about one configuration.
 #[derive(Clone, Debug)]
 struct Evaluation<const N: usize> {
@@ -216,11 +236,7 @@ impl<const N: usize> Evaluation<N> {
     ) {
         let robot = scenario.robot();
         forward_kinematics(robot, q, &mut self.frames);
-        self.error = pose_error(
-            &self.frames,
-            target,
-            scenario.settings().law.orientation_scale,
-        );
+        self.error = target_error(scenario, &self.frames, q, target);
         self.field = potential_gradient(
             robot,
             &self.frames,
@@ -477,17 +493,30 @@ impl<const N: usize> Planner<N> {
     fn pass_waypoints<const M: usize, const W: usize>(&mut self, scenario: &Scenario<N, M, W>) {
         let settings = scenario.settings();
         let targets = scenario.targets();
+        let n = self.n.min(N);
         while let Phase::Moving { waypoint } = self.phase {
-            // While detouring, `now.error` is the detour point's; the
-            // waypoint is judged by its own.
-            let e = match (self.escape.subgoal(), targets.get(waypoint as usize)) {
-                (Some(_), Some(target)) => {
-                    pose_error(&self.now.frames, target, settings.law.orientation_scale)
-                }
-                _ => self.now.error,
+            let Some(target) = targets.get(waypoint as usize) else {
+                return;
             };
-            let within = e.position <= settings.position_tolerance
-                && (!e.has_orientation || e.orientation <= settings.orientation_tolerance);
+            let within = match target.joints.and_then(|k| scenario.joint_goal(k)) {
+                // A joint goal: within a twentieth of a step of it.
+                Some(goal) => {
+                    gap(scenario.robot(), &self.q[..n], goal)
+                        <= JOINT_GOAL_TOLERANCE * settings.time_step_s
+                }
+                None => {
+                    // While detouring, `now.error` is the detour point's; the
+                    // waypoint is judged by its own.
+                    let e = match self.escape.subgoal() {
+                        Some(_) => {
+                            pose_error(&self.now.frames, target, settings.law.orientation_scale)
+                        }
+                        None => self.now.error,
+                    };
+                    e.position <= settings.position_tolerance
+                        && (!e.has_orientation || e.orientation <= settings.orientation_tolerance)
+                }
+            };
             if !within {
                 return;
             }
@@ -499,15 +528,12 @@ impl<const N: usize> Planner<N> {
             self.phase = Phase::Moving {
                 waypoint: next as u8,
             };
-            self.now.error = pose_error(
-                &self.now.frames,
-                &targets[next],
-                settings.law.orientation_scale,
-            );
+            if let Some(target) = targets.get(next) {
+                self.now.error = target_error(scenario, &self.now.frames, &self.q[..n], target);
+            }
             self.best_v = self.now.error.v;
             self.best_step = self.step;
             self.error_step = 0.0;
-            let n = self.n.min(N);
             self.escape.next_waypoint(&self.q[..n], self.now.error.v);
         }
     }
@@ -535,7 +561,11 @@ impl<const N: usize> Planner<N> {
     ) {
         let settings = scenario.settings();
         // Within f32 noise of the target there is nothing to escape from.
-        let noise = NUMERIC_FLOOR * scenario.robot().reach();
+        let noise = if target.joints.is_some() {
+            NUMERIC_FLOOR // seconds, for a joint goal's V
+        } else {
+            NUMERIC_FLOOR * scenario.robot().reach()
+        };
         if settings.escape.attempts == 0 || self.now.error.v <= 0.5 * noise * noise {
             self.phase = Phase::Done(Outcome::Stalled);
             return;
@@ -559,17 +589,21 @@ impl<const N: usize> Planner<N> {
     /// After a step of a walk or a detour: is it over? A finished walk or
     /// detour hands back to the law (toward `target`) with a fresh stall
     /// window; a finished return ends `Stalled`.
-    fn after_escape_step(&mut self, settings: &Settings, robot: &Robot<N>, target: &Target) {
+    fn after_escape_step<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+    ) {
+        let (settings, robot) = (scenario.settings(), scenario.robot());
         let n = self.n.min(N);
         let (gap, reached) = if let Some(point) = self.escape.subgoal() {
             let radius = DETOUR_RADIUS * robot.reach();
             (norm(&(point - self.now.frames.end_position())), radius)
         } else if let Some(goal) = self.escape.goal() {
-            let mut gap = 0.0f32;
-            for ((joint, &qj), &gj) in robot.joints().iter().zip(&self.q[..n]).zip(&goal[..n]) {
-                gap = crate::math::max(gap, (gj - qj).abs() / joint.max_rate);
-            }
-            (gap, 0.1 * settings.time_step_s)
+            (
+                gap(robot, &self.q[..n], &goal[..n]),
+                0.1 * settings.time_step_s,
+            )
         } else {
             return;
         };
@@ -579,7 +613,7 @@ impl<const N: usize> Planner<N> {
                 self.phase = Phase::Done(Outcome::Stalled);
             }
             // Back to the target: its error, and a fresh stall window.
-            self.now.error = pose_error(&self.now.frames, target, settings.law.orientation_scale);
+            self.now.error = target_error(scenario, &self.now.frames, &self.q[..n], target);
             self.best_v = self.now.error.v;
             self.best_step = self.step;
         }
@@ -587,8 +621,8 @@ impl<const N: usize> Planner<N> {
 
     /// Takes one planning step. Returns the report; a finished planner returns
     /// its final report again without moving.
-    // Not inlined: callers such as the board's serving loop reach it from
-    // several places, and one copy of the step is 4 KiB of flash.
+    // Not inlined: the board's serving loop reaches it from two places, and
+    // a copy of the step is 7 KiB of flash.
     #[inline(never)]
     pub fn step<const M: usize, const W: usize>(
         &mut self,
@@ -621,10 +655,7 @@ impl<const N: usize> Planner<N> {
         // obstacle that blocked it (position only).
         let detour = self.escape.subgoal();
         let drive_target = match detour {
-            Some(point) => Target {
-                position: point,
-                orientation: None,
-            },
+            Some(point) => Target::pose(point, None),
             None => target,
         };
         if detour.is_some() {
@@ -658,13 +689,18 @@ impl<const N: usize> Planner<N> {
         };
         let walking = self.escape.goal().is_some();
         let escaping = walking || detour.is_some();
-        let (drive, constrained, mut h) = match (self.escape.goal(), &mut self.law) {
-            // Escaping: straight to the walk's goal in joint space.
+        // Straight in joint space: an escape walk, or a joint goal.
+        let joint_goal = match (self.escape.goal(), drive_target.joints) {
+            (Some(goal), _) => Some(&goal[..n]),
+            (None, Some(k)) => scenario.joint_goal(k),
+            (None, None) => None,
+        };
+        let (drive, constrained, mut h) = match (joint_goal, &mut self.law) {
             (Some(goal), _) => {
                 let step = joint_rate(
                     robot,
                     &self.q[..n],
-                    &goal[..n],
+                    goal,
                     &guard,
                     settings.time_step_s,
                     &mut self.rate[..n],
@@ -771,7 +807,7 @@ impl<const N: usize> Planner<N> {
 
         // Progress and outcome.
         if escaping {
-            self.after_escape_step(&settings, robot, &target);
+            self.after_escape_step(scenario, &target);
         } else {
             if self.now.error.v < self.best_v * (1.0 - settings.stall_progress) {
                 self.best_v = self.now.error.v;

@@ -125,9 +125,6 @@ pub fn approach(clearance: Option<f32>, engage: f32, contact_floor: f32) -> f32 
 /// (`n` values) that approaches the obstacles; with strength 1, afterwards
 /// `mu . rate <= 0`. `locked` is scratch of `n` flags. Returns whether the
 /// rate was constrained.
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn project<const N: usize>(
     robot: &Robot<N>,
     q: &[f32],
@@ -197,9 +194,6 @@ pub fn project<const N: usize>(
 
 /// Scales `rate` uniformly so that no joint exceeds its rate limit; keeps the
 /// direction (so orthogonality to `mu` and descent survive). Returns the scale.
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn limit_rates<const N: usize>(robot: &Robot<N>, rate: &mut [f32]) -> f32 {
     let worst = robot
         .joints()

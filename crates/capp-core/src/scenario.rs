@@ -2,10 +2,14 @@
 //! every step reads. Capacities: `N` joints, `M` obstacles, `W` waypoints.
 
 use crate::control::Target;
+use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{is_rotation, vec3, Mat3};
-use crate::mission::{Mission, MissionError, Settings, Waypoint};
+use crate::mission::{JointGoalProblem, Mission, MissionError, Settings, Waypoint};
 use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
 use crate::robot::{Joint, Robot, RobotError};
+
+/// Most waypoints of a scenario that are joint configurations.
+pub const MAX_JOINT_GOALS: usize = 4;
 
 /// Tolerance on `R^T R - I` and `det R - 1` for a target orientation.
 pub const ROTATION_TOLERANCE: f32 = 1.0e-3;
@@ -53,8 +57,9 @@ impl core::fmt::Display for ScenarioError {
 pub struct Scenario<const N: usize, const M: usize, const W: usize> {
     robot: Robot<N>,
     obstacles: heapless::Vec<Obstacle, M>,
-    waypoints: heapless::Vec<Waypoint, W>,
     targets: heapless::Vec<Target, W>,
+    /// Joint configurations some targets are ([`Scenario::set_joint_goal`]).
+    joint_goals: heapless::Vec<[f32; N], MAX_JOINT_GOALS>,
     settings: Settings,
 }
 
@@ -78,8 +83,8 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         Scenario {
             robot: Robot::empty(),
             obstacles: heapless::Vec::new(),
-            waypoints: heapless::Vec::new(),
             targets: heapless::Vec::new(),
+            joint_goals: heapless::Vec::new(),
             settings: Settings::default(),
         }
     }
@@ -131,13 +136,13 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         let Scenario {
             robot: _,
             obstacles: validated,
-            waypoints: kept,
             targets,
+            joint_goals,
             settings: kept_settings,
         } = self;
         validated.clear();
-        kept.clear();
         targets.clear();
+        joint_goals.clear();
         *kept_settings = settings;
         settings.validate()?;
         if obstacles.len() > M || obstacles.len() > u8::MAX as usize + 1 {
@@ -180,12 +185,9 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
                     Some(r)
                 }
             };
-            kept.push(*w)
+            targets
+                .push(Target::pose(vec3(w.position), orientation))
                 .map_err(|_| MissionError::TooManyWaypoints { capacity: W })?;
-            let _ = targets.push(Target {
-                position: vec3(w.position),
-                orientation,
-            });
         }
         Ok(())
     }
@@ -200,9 +202,61 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         &self.obstacles
     }
 
-    /// The waypoints as given.
-    pub fn waypoints(&self) -> &[Waypoint] {
-        &self.waypoints
+    /// The waypoints, pose by pose (a joint goal's is its configuration's).
+    pub fn waypoints(&self) -> impl Iterator<Item = Waypoint> + '_ {
+        self.targets.iter().map(|t| Waypoint {
+            position: [t.position.x, t.position.y, t.position.z],
+            orientation: t
+                .orientation
+                .map(|r| [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]])),
+        })
+    }
+
+    /// Joint goal `k` (radians or length units), when there is one.
+    pub fn joint_goal(&self, k: u8) -> Option<&[f32]> {
+        let n = self.robot.len();
+        self.joint_goals.get(k as usize).map(|q| &q[..n])
+    }
+
+    /// Makes waypoint `waypoint` (0-based) the joint configuration `joints`
+    /// (one value per joint, finite, within the limits): the planner drives
+    /// the joints there straight, in joint space
+    /// ([`crate::control::joint_space`]), and passes it when the joints are
+    /// within a twentieth of a time step of it at their rate limits. At most
+    /// [`MAX_JOINT_GOALS`] per scenario; the waypoint's pose becomes the
+    /// configuration's (for the reports).
+    pub fn set_joint_goal(&mut self, waypoint: usize, joints: &[f32]) -> Result<(), ScenarioError> {
+        let index = waypoint.min(u8::MAX as usize) as u8;
+        let bad = |problem| MissionError::BadJointGoal {
+            waypoint: index,
+            problem,
+        };
+        let n = self.robot.len();
+        if waypoint >= self.targets.len() {
+            return Err(bad(JointGoalProblem::NoSuchWaypoint).into());
+        }
+        if joints.len() != n {
+            return Err(bad(JointGoalProblem::WrongLength).into());
+        }
+        if self.robot.first_outside_limits(joints).is_some() {
+            return Err(bad(JointGoalProblem::OutsideLimits).into());
+        }
+        let k = self.joint_goals.len();
+        let mut goal = [0.0f32; N];
+        goal[..n].copy_from_slice(joints);
+        self.joint_goals
+            .push(goal)
+            .map_err(|_| bad(JointGoalProblem::TooMany))?;
+        let mut frames = Frames::<N>::default();
+        forward_kinematics(&self.robot, joints, &mut frames);
+        if let Some(t) = self.targets.get_mut(waypoint) {
+            *t = Target {
+                position: frames.end_position(),
+                orientation: Some(*frames.end_rotation()),
+                joints: Some(k as u8),
+            };
+        }
+        Ok(())
     }
 
     /// The targets the planner drives to, one per waypoint.

@@ -312,7 +312,7 @@ fn metres_and_inches_give_the_same_outcome() {
     bad = Sc::new(
         robot,
         &obstacles,
-        &Mission::new(bad.waypoints(), s).unwrap(),
+        &Mission::new(&bad.waypoints().collect::<Vec<_>>(), s).unwrap(),
     )
     .unwrap();
     match Planner::new(&bad, &start_m) {

@@ -492,7 +492,8 @@ fn check_run(sc: &Sc, start: &[f32]) -> Result<Outcome, TestCaseError> {
         if let Phase::Done(outcome) = r.phase {
             prop_assert!(r.step <= s.max_steps, "ran past the cap: {}", r.step);
             if outcome == Outcome::Reached {
-                let target = sc.waypoints().last().unwrap().position.map(|x| x as f64);
+                let p = sc.targets().last().unwrap().position;
+                let target = [p.x as f64, p.y as f64, p.z as f64];
                 let chain = fk64(&joints, &to64(q));
                 let hand = *chain.origins.last().unwrap();
                 let d = dot(sub(hand, target), sub(hand, target)).sqrt();

@@ -611,7 +611,7 @@ impl<const TXQ: usize> Node<TXQ> {
         let s = &mut self.status;
         let seq = s.setpoints;
         s.setpoints = s.setpoints.wrapping_add(1);
-        let last_waypoint = active.scenario.waypoints().len().saturating_sub(1) as u8;
+        let last_waypoint = active.scenario.targets().len().saturating_sub(1) as u8;
         let setpoint = Reply::Setpoint {
             seq,
             step: report.step,

@@ -65,9 +65,6 @@ impl<const N: usize> FirstOrderWorkspace<N> {
 /// strength `engage`), and `h` (seconds). `error_step` is the position error's
 /// change over the last step (the listing's rule needs it).
 #[allow(clippy::too_many_arguments)]
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn first_order_rate<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,

@@ -24,6 +24,32 @@ use crate::math::{dot_slice, max};
 use crate::projection::Guard;
 use crate::robot::Robot;
 
+/// How far `q` is from `goal`: seconds for the most loaded joint at its rate
+/// limit, `max_j |goal_j - q_j| / qdot_max_j`.
+pub fn gap<const N: usize>(robot: &Robot<N>, q: &[f32], goal: &[f32]) -> f32 {
+    robot
+        .joints()
+        .iter()
+        .zip(q.iter().zip(goal))
+        .map(|(joint, (&qj, &gj))| (gj - qj).abs() / joint.max_rate)
+        .fold(0.0f32, max)
+}
+
+/// The joint-space counterpart of `V` for a joint goal, seconds squared:
+/// `1/2 sum_j ((goal_j - q_j) / qdot_max_j)^2`, so that a step toward the goal
+/// lowers it, as a step of the law lowers `V`.
+pub fn joint_v<const N: usize>(robot: &Robot<N>, q: &[f32], goal: &[f32]) -> f32 {
+    0.5 * robot
+        .joints()
+        .iter()
+        .zip(q.iter().zip(goal))
+        .map(|(joint, (&qj, &gj))| {
+            let t = (gj - qj) / joint.max_rate;
+            t * t
+        })
+        .sum::<f32>()
+}
+
 /// The rate (per second, into `rate`) that takes the joints from `q` toward
 /// `goal` at the rate limits, projected against `guard`, for a step of
 /// `time_step_s`. All slices hold `robot.len()` values.

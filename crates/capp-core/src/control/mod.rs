@@ -61,6 +61,21 @@ pub struct Target {
     pub position: Vec3,
     /// `R_target` (columns `r_T1..r_T3`), or `None` to ignore orientation.
     pub orientation: Option<Mat3>,
+    /// A joint configuration to reach instead (index into the scenario's
+    /// joint goals, [`crate::Scenario::joint_goal`]); `position` and
+    /// `orientation` are then its pose, for the reports.
+    pub joints: Option<u8>,
+}
+
+impl Target {
+    /// A pose target (no joint configuration).
+    pub const fn pose(position: Vec3, orientation: Option<Mat3>) -> Self {
+        Target {
+            position,
+            orientation,
+            joints: None,
+        }
+    }
 }
 
 /// The end effector's error from a target (eqs. 11-12).
@@ -187,20 +202,14 @@ impl<const N: usize> LawWorkspace<N> {
 
     /// Whether these are the buffers `kind` uses.
     pub fn suits(&self, kind: LawKind) -> bool {
-        matches!(
-            (self, kind),
-            (
-                LawWorkspace::FirstOrder(_),
-                LawKind::Gradient | LawKind::Paper
-            ) | (LawWorkspace::Damped(_), LawKind::DampedLeastSquares)
-        )
+        match self {
+            LawWorkspace::FirstOrder(_) => matches!(kind, LawKind::Gradient | LawKind::Paper),
+            LawWorkspace::Damped(_) => kind == LawKind::DampedLeastSquares,
+        }
     }
 }
 
 /// `g_i = J_i^T e_i` for the four terms, each into `terms[i][..n]` (zero when inactive).
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn lyapunov_terms<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -245,9 +254,6 @@ pub enum Drive {
 /// those per-joint gains (per second per unit of `G`); for eq. 15's sum, whose
 /// rate is no fixed multiple of `G`, `gain` is all zero.
 #[allow(clippy::too_many_arguments)]
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn weighted_rate<const N: usize>(
     robot: &Robot<N>,
     q: &[f32],
@@ -330,9 +336,6 @@ pub fn weighted_rate<const N: usize>(
 }
 
 /// `-dV/dt = G . rate` for a joint rate, with `G = sum_i w_i g_i` (eq. 13).
-// Out of line: unrolled for up to `N` joints at every call site, these
-// loops cost kilobytes of the board's flash (see the crate docs).
-#[inline(never)]
 pub fn descent_rate<const N: usize>(
     terms: &[[f32; N]; 4],
     settings: &LawSettings,
