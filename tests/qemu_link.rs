@@ -83,6 +83,7 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
         joints: &joints,
         obstacles: &[],
         waypoints: &waypoints,
+        joint_goals: &[],
         settings,
         start: &start,
     };
@@ -233,6 +234,7 @@ fn commands_sent_while_a_plan_runs_are_all_answered() {
         joints: &joints,
         obstacles: &[],
         waypoints: &waypoints,
+        joint_goals: &[],
         settings,
         start: &start,
     })

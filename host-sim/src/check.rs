@@ -549,10 +549,28 @@ pub fn check(problem: &Problem, trajectory: &Trajectory) -> CheckReport {
         });
         let s = &problem.settings;
         let slack = 1.0 + 1.0e-3;
-        report.reaches_target = report.final_position_error <= s.position_tolerance as f64 * slack
-            && report
-                .final_orientation_error
-                .is_none_or(|o| o <= s.orientation_tolerance as f64 * slack);
+        let last = problem.waypoints.len().saturating_sub(1);
+        let joint_goal = problem.joint_goals.iter().find(|(w, _)| *w == last);
+        report.reaches_target = match (joint_goal, trajectory.rows.last()) {
+            // A joint-space target: every joint within a twentieth of a time
+            // step of it at its rate limit.
+            (Some((_, goal)), Some(row)) => {
+                row.q
+                    .iter()
+                    .zip(goal)
+                    .zip(&problem.joints)
+                    .all(|((&q, &g), joint)| {
+                        (q - g as f64).abs() / joint.max_rate as f64
+                            <= 0.05 * s.time_step_s as f64 * slack
+                    })
+            }
+            _ => {
+                report.final_position_error <= s.position_tolerance as f64 * slack
+                    && report
+                        .final_orientation_error
+                        .is_none_or(|o| o <= s.orientation_tolerance as f64 * slack)
+            }
+        };
     }
     report.violations = violations;
     report

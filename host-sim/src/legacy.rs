@@ -280,6 +280,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     Ok(Problem {
+        joint_goals: Vec::new(),
         name,
         description: String::new(),
         source: path.to_path_buf(),

@@ -118,6 +118,10 @@ pub struct Problem {
     pub start: Vec<f32>,
     /// Which steps become setpoints.
     pub setpoints: SetpointFilter,
+    /// Waypoints that are joint configurations: (waypoint index, one value
+    /// per joint, radians or length units). Their entry in `waypoints` is a
+    /// placeholder the core replaces by the configuration's pose.
+    pub joint_goals: Vec<(usize, Vec<f32>)>,
     /// Where each item is in the file.
     pub lines: Lines,
 }
@@ -156,7 +160,7 @@ impl Problem {
                     e.to_string(),
                 )
             })?;
-        Scenario::new(robot, &self.obstacles, &mission).map_err(|e| {
+        let mut scenario = Scenario::new(robot, &self.obstacles, &mission).map_err(|e| {
             let line = match e {
                 ScenarioError::Robot(r) => {
                     robot_error_joint(&r).and_then(|j| self.lines.joints.get(j).copied().flatten())
@@ -200,7 +204,20 @@ impl Problem {
                 }
             }
             self.error(line, message)
-        })
+        })?;
+        for (waypoint, joints) in &self.joint_goals {
+            scenario.set_joint_goal(*waypoint, joints).map_err(|e| {
+                let mut message = e.to_string();
+                if self.kind == SourceKind::Toml && *waypoint + 1 == self.waypoints.len() {
+                    message = message.replace(&format!("waypoint {}", waypoint + 1), "target");
+                }
+                self.error(
+                    self.lines.waypoints.get(*waypoint).copied().flatten(),
+                    message,
+                )
+            })?;
+        }
+        Ok(scenario)
     }
 
     /// Runs every check of the core (robot, obstacles, mission, start

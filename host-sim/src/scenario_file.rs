@@ -128,9 +128,11 @@ enum StartSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PoseSpec {
-    position: [f64; 3],
+    position: Option<[f64; 3]>,
     euler: Option<[f64; 3]>,
     matrix: Option<[[f64; 3]; 3]>,
+    /// A joint configuration instead of a pose.
+    joints: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -398,6 +400,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
 
     // Waypoints, then the target.
     let mut waypoints = Vec::new();
+    let mut joint_goals = Vec::new();
     let mut waypoint_lines = Vec::new();
     let count = file.waypoints.len();
     for (i, spec) in file.waypoints.into_iter().chain([file.target]).enumerate() {
@@ -408,6 +411,47 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             format!("waypoint {}", i + 1)
         };
         let s = spec.into_inner();
+        let position = match (s.position, s.joints) {
+            (Some(p), None) => p,
+            (None, Some(values)) => {
+                if s.euler.is_some() || s.matrix.is_some() {
+                    return Err(err(
+                        line,
+                        format!("{what}: a joint configuration has no `euler` or `matrix`"),
+                    ));
+                }
+                if values.len() != joints.len() {
+                    return Err(err(
+                        line,
+                        format!(
+                            "{what}: `joints` has {} values for {} joints",
+                            values.len(),
+                            joints.len()
+                        ),
+                    ));
+                }
+                let q: Vec<f32> = values
+                    .iter()
+                    .zip(&joints)
+                    .map(|(&v, j)| match j.kind {
+                        JointKind::Revolute => (v * angle) as f32,
+                        JointKind::Prismatic => v as f32,
+                    })
+                    .collect();
+                joint_goals.push((i, q));
+                // A placeholder: the core puts the configuration's pose here.
+                waypoints.push(Waypoint::at([0.0; 3]));
+                waypoint_lines.push(Some(line));
+                continue;
+            }
+            (Some(_), Some(_)) => {
+                return Err(err(
+                    line,
+                    format!("{what}: give either `position` or `joints`, not both"),
+                ))
+            }
+            (None, None) => return Err(err(line, format!("{what}: give `position` or `joints`"))),
+        };
         let orientation = match (s.euler, s.matrix) {
             (Some(_), Some(_)) => {
                 return Err(err(
@@ -434,7 +478,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             (None, None) => None,
         };
         waypoints.push(Waypoint {
-            position: s.position.map(|x| x as f32),
+            position: position.map(|x| x as f32),
             orientation,
         });
         waypoint_lines.push(Some(line));
@@ -564,7 +608,26 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default()
     });
+    // A joint goal's waypoint is its configuration's pose (the core's own
+    // kinematics, as the planner will compute it), for reports and pictures.
+    if let Ok(robot) = Robot::<MAX_JOINTS>::new(&joints) {
+        let mut frames = capp_core::kinematics::Frames::<MAX_JOINTS>::default();
+        for (w, q) in &joint_goals {
+            if q.len() == joints.len() {
+                capp_core::kinematics::forward_kinematics(&robot, q, &mut frames);
+                let p = frames.end_position();
+                let r = frames.end_rotation();
+                if let Some(waypoint) = waypoints.get_mut(*w) {
+                    *waypoint = Waypoint::pose(
+                        [p.x, p.y, p.z],
+                        [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
+                    );
+                }
+            }
+        }
+    }
     Ok(Problem {
+        joint_goals,
         name,
         description: file.description.trim().to_string(),
         source: path.to_path_buf(),

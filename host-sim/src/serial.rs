@@ -202,6 +202,7 @@ pub fn plan_on_board<T: Read + Write>(
         joints: &problem.joints,
         obstacles: &problem.obstacles,
         waypoints: &problem.waypoints,
+        joint_goals: &problem.joint_goals,
         settings: problem.settings,
         start: &problem.start,
     })?;

@@ -388,3 +388,62 @@ fn the_binary_runs_checks_and_renders() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stdout).contains("outcome:           stalled"));
 }
+
+#[test]
+fn toml_joint_waypoints() {
+    // Both a pose and a configuration, or neither, or the wrong count.
+    let tail = "\n[target]\nposition = [0.4, 0.7, 0.0]\njoints = [10.0, 20.0]\n";
+    rejects(
+        "both.toml",
+        &planar("", tail),
+        24,
+        "give either `position` or `joints`",
+    );
+    let tail = "\n[target]\neuler = [0.0, 0.0, 0.0]\n";
+    rejects(
+        "neither.toml",
+        &planar("", tail),
+        24,
+        "give `position` or `joints`",
+    );
+    let tail = "\n[[waypoints]]\njoints = [10.0]\n\n[target]\nposition = [0.4, 0.7, 0.0]\n";
+    rejects(
+        "count.toml",
+        &planar("", tail),
+        24,
+        "waypoint 1: `joints` has 1 values for 2 joints",
+    );
+    let tail = "\n[target]\njoints = [10.0, 200.0]\n";
+    rejects(
+        "limits.toml",
+        &planar("", tail),
+        24,
+        "target: joint configuration: a value is not finite or outside its limits",
+    );
+    // A good one: its pose is the configuration's, it plans, and it is reached.
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        &dir,
+        "ok.toml",
+        &planar(
+            "",
+            "\n[[waypoints]]\njoints = [40.0, 30.0]\n\n[target]\njoints = [90.0, -20.0]\n",
+        ),
+    );
+    let problem = Problem::load(&path).unwrap();
+    assert_eq!(problem.joint_goals.len(), 2);
+    let (a, b) = (0.5f32, 0.4f32);
+    let (t1, t2) = (90f32.to_radians(), -20f32.to_radians());
+    let x = a * t1.cos() + b * (t1 + t2).cos();
+    let y = a * t1.sin() + b * (t1 + t2).sin();
+    let p = problem.waypoints[1].position;
+    assert!((p[0] - x).abs() < 1e-5 && (p[1] - y).abs() < 1e-5, "{p:?}");
+    let scenario = problem.validate().unwrap();
+    let result = capp_sim::plan::run(&problem, &scenario, |_| {}).unwrap();
+    assert_eq!(result.outcome, capp_core::Outcome::Reached);
+    let end = &result.rows.last().unwrap().q;
+    assert!(
+        (end[0] - t1).abs() < 1e-2 && (end[1] - t2).abs() < 1e-2,
+        "{end:?}"
+    );
+}

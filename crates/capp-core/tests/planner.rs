@@ -540,3 +540,98 @@ fn the_listing_decimation_emits_start_changes_and_end() {
         );
     }
 }
+
+#[test]
+fn joint_space_waypoints_are_reached_in_joint_space_then_the_pose_target() {
+    // PIPS from home via a joint configuration to a pose, and to a joint
+    // configuration as the target.
+    let joints = pips::joints();
+    let home = pips::home();
+    let mut via = home;
+    for (q, j) in via.iter_mut().zip(&joints) {
+        *q = j.clamp(*q + 0.35 * (j.max - j.min) * 0.5);
+    }
+    let mut goal = home;
+    for (i, (q, j)) in goal.iter_mut().zip(&joints).enumerate() {
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        *q = j.clamp(*q + sign * 0.2 * (j.max - j.min) * 0.5);
+    }
+    let (p, r) = pose_of(&joints, &home);
+    let waypoints = [
+        Waypoint::at([0.0; 3]),
+        Waypoint::pose(p, r),
+        Waypoint::at([0.0; 3]),
+    ];
+    let mut sc = scenario(&joints, &[], &waypoints, Settings::default());
+    sc.set_joint_goal(0, &via).unwrap();
+    sc.set_joint_goal(2, &goal).unwrap();
+    assert_eq!(sc.targets()[0].joints, Some(0));
+    assert_eq!(sc.joint_goal(1), Some(&goal[..]));
+    // The joint goal's pose is its configuration's.
+    let (gp, _) = pose_of(&joints, &goal);
+    let t = sc.targets()[2].position;
+    assert!((t.x - gp[0]).abs() < 1e-3 && (t.y - gp[1]).abs() < 1e-3 && (t.z - gp[2]).abs() < 1e-3);
+
+    let mut planner = Planner::new(&sc, &home).unwrap();
+    let mut seen = Vec::new();
+    let mut at_via = None;
+    let outcome = planner
+        .run(&sc, |pl, r| {
+            if let Phase::Moving { waypoint } = r.phase {
+                if seen.last() != Some(&waypoint) {
+                    if waypoint == 1 {
+                        at_via = Some(pl.joints().to_vec());
+                    }
+                    seen.push(waypoint);
+                }
+            }
+        })
+        .unwrap();
+    assert_eq!(outcome, Outcome::Reached);
+    assert_eq!(seen, vec![0, 1, 2]);
+    let tolerance = |q: &[f32], g: &[f32]| {
+        q.iter()
+            .zip(g)
+            .zip(&joints)
+            .all(|((a, b), j)| (a - b).abs() <= 0.05 * 0.05 * j.max_rate + 1e-5)
+    };
+    assert!(
+        tolerance(at_via.as_deref().unwrap(), &via),
+        "passed the via configuration"
+    );
+    assert!(
+        tolerance(planner.joints(), &goal),
+        "ended at the goal configuration"
+    );
+
+    // What a joint goal may not be.
+    let mut sc = scenario(&joints, &[], &waypoints, Settings::default());
+    let problem = |e: ScenarioError| match e {
+        ScenarioError::Mission(MissionError::BadJointGoal { problem, .. }) => problem,
+        other => panic!("{other:?}"),
+    };
+    use capp_core::mission::JointGoalProblem as P;
+    assert_eq!(
+        problem(sc.set_joint_goal(0, &via[..17]).unwrap_err()),
+        P::WrongLength
+    );
+    let mut out = via;
+    out[3] = 1e3;
+    assert_eq!(
+        problem(sc.set_joint_goal(0, &out).unwrap_err()),
+        P::OutsideLimits
+    );
+    out[3] = f32::NAN;
+    assert_eq!(
+        problem(sc.set_joint_goal(0, &out).unwrap_err()),
+        P::OutsideLimits
+    );
+    assert_eq!(
+        problem(sc.set_joint_goal(3, &via).unwrap_err()),
+        P::NoSuchWaypoint
+    );
+    for _ in 0..capp_core::scenario::MAX_JOINT_GOALS {
+        sc.set_joint_goal(0, &via).unwrap();
+    }
+    assert_eq!(problem(sc.set_joint_goal(0, &via).unwrap_err()), P::TooMany);
+}

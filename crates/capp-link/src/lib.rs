@@ -95,6 +95,9 @@ pub struct Upload<'a> {
     pub obstacles: &'a [capp_core::SuperEllipsoid],
     /// The waypoints (the last is the target).
     pub waypoints: &'a [capp_core::Waypoint],
+    /// Which of them are joint configurations: (waypoint index, one value per
+    /// joint); sent as `JointWaypoint` in their place.
+    pub joint_goals: &'a [(usize, Vec<f32>)],
     /// The settings.
     pub settings: capp_core::Settings,
     /// The start configuration.
@@ -325,10 +328,20 @@ impl<T: Read + Write> Link<T> {
             })?;
         }
         for (i, w) in upload.waypoints.iter().enumerate() {
-            self.expect_ack(&Command::Waypoint {
-                index: i as u8,
-                waypoint: (*w).into(),
-            })?;
+            match upload.joint_goals.iter().find(|(k, _)| *k == i) {
+                Some((_, q)) => {
+                    let joints =
+                        Joints::from_slice(q).map_err(|_| LinkError::TooLarge("joints"))?;
+                    self.expect_ack(&Command::JointWaypoint {
+                        index: i as u8,
+                        joints,
+                    })?
+                }
+                None => self.expect_ack(&Command::Waypoint {
+                    index: i as u8,
+                    waypoint: (*w).into(),
+                })?,
+            }
         }
         self.expect_ack(&Command::Settings(upload.settings.into()))?;
         let start = Joints::from_slice(upload.start).map_err(|_| LinkError::TooLarge("joints"))?;

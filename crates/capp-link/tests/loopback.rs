@@ -109,6 +109,7 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
         joints: &joints,
         obstacles: &[],
         waypoints: &waypoints,
+        joint_goals: &[],
         settings: Settings::default(),
         start: &home,
     })

@@ -66,14 +66,15 @@ extern crate std;
 mod log;
 pub mod rx;
 
+use capp_core::scenario::MAX_JOINT_GOALS;
 use capp_core::setpoint::Decimator;
 use capp_core::{
     MissionError, ObstacleError, Phase, Planner, RobotError, Scenario, ScenarioError,
     SetpointFilter, StartError, SuperEllipsoid,
 };
 use capp_proto::{
-    Command, ErrorCode, FrameError, Part, Preset, Reply, State, Status, MAX_FRAME, MAX_JOINTS as N,
-    MAX_OBSTACLES as M, MAX_WAYPOINTS as W, NO_COMMAND, NO_INDEX,
+    Command, ErrorCode, EscapeMode, FrameError, Part, Preset, Reply, State, Status, MAX_FRAME,
+    MAX_JOINTS as N, MAX_OBSTACLES as M, MAX_WAYPOINTS as W, NO_COMMAND, NO_INDEX,
 };
 use embedded_hal_nb::{nb, serial};
 use heapless::{Deque, Vec};
@@ -94,6 +95,8 @@ struct Draft {
     joints: Vec<capp_core::Joint, N>,
     obstacles: Vec<SuperEllipsoid, M>,
     waypoints: Vec<capp_core::Waypoint, W>,
+    /// Waypoints that are joint configurations: (waypoint index, values).
+    joint_goals: Vec<(u8, Vec<f32, N>), MAX_JOINT_GOALS>,
     /// `None`: the defaults (kept as `None` so `Draft::new` can be `const`).
     settings: Option<capp_core::Settings>,
     start: Vec<f32, N>,
@@ -105,6 +108,7 @@ impl Draft {
             joints: Vec::new(),
             obstacles: Vec::new(),
             waypoints: Vec::new(),
+            joint_goals: Vec::new(),
             settings: None,
             start: Vec::new(),
         }
@@ -116,12 +120,14 @@ impl Draft {
             joints,
             obstacles,
             waypoints,
+            joint_goals,
             settings,
             start,
         } = self;
         joints.clear();
         obstacles.clear();
         waypoints.clear();
+        joint_goals.clear();
         *settings = None;
         start.clear();
     }
@@ -145,6 +151,8 @@ const IDLE: Status = Status {
     step_cycles_min: 0,
     step_cycles_mean: 0,
     step_cycles_max: 0,
+    escape: EscapeMode::Descending,
+    escape_attempt: 0,
 };
 
 /// The plan: valid while `Status::state` is `Running` (and after, until the
@@ -429,7 +437,10 @@ impl<const TXQ: usize> Node<TXQ> {
                     d.start.clear();
                 }
                 Part::Obstacles => d.obstacles.clear(),
-                Part::Waypoints => d.waypoints.clear(),
+                Part::Waypoints => {
+                    d.waypoints.clear();
+                    d.joint_goals.clear();
+                }
             },
             Command::Preset(Preset::Pips) => {
                 let joints = capp_core::pips::joints();
@@ -460,6 +471,22 @@ impl<const TXQ: usize> Node<TXQ> {
                     && w.orientation
                         .is_none_or(|r| r.iter().all(|row| finite(row)));
                 append(&mut d.waypoints, *index, w.into(), ok)?;
+            }
+            Command::JointWaypoint { index, joints } => {
+                if let Some(i) = joints.iter().position(|x| !x.is_finite()) {
+                    return Err((ErrorCode::NotFinite, i as u8));
+                }
+                if d.joint_goals.is_full() {
+                    return Err((ErrorCode::Capacity, *index));
+                }
+                // A waypoint slot whose pose the core fills in at `Run`.
+                append(
+                    &mut d.waypoints,
+                    *index,
+                    capp_core::Waypoint::at([0.0; 3]),
+                    true,
+                )?;
+                let _ = d.joint_goals.push((*index, joints.clone()));
             }
             Command::Settings(s) => {
                 let s = capp_core::Settings::from(*s);
@@ -520,6 +547,11 @@ impl<const TXQ: usize> Node<TXQ> {
                 d.settings.unwrap_or_default(),
             )
             .map_err(scenario_refusal)?;
+        for (waypoint, joints) in &d.joint_goals {
+            plan.scenario
+                .set_joint_goal(*waypoint as usize, joints)
+                .map_err(scenario_refusal)?;
+        }
         plan.planner
             .restart(&plan.scenario, &d.start)
             .map_err(start_refusal)?;
@@ -575,6 +607,7 @@ impl<const TXQ: usize> Node<TXQ> {
         s.position_error = report.position_error;
         s.orientation_error = report.orientation_error;
         s.clearance = report.clearance.map(|c| c.value);
+        (s.escape, s.escape_attempt) = capp_proto::escape_status(report.escape);
         self.offer_setpoint(&report);
         if let (Some(counter), Some(t0)) = (self.cycle_counter, started) {
             self.cycles.add(counter().wrapping_sub(t0));
@@ -744,7 +777,8 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
         ScenarioError::Mission(e) => {
             let index = match e {
                 MissionError::BadPosition { waypoint }
-                | MissionError::NotARotation { waypoint } => waypoint,
+                | MissionError::NotARotation { waypoint }
+                | MissionError::BadJointGoal { waypoint, .. } => waypoint,
                 _ => NO_INDEX,
             };
             (ErrorCode::InvalidMission, index)

@@ -470,3 +470,98 @@ fn replies_are_never_dropped_when_the_uart_stalls() {
         assert!(matches!(r, Reply::Pong { nonce, .. } if *nonce == i as u32));
     }
 }
+
+#[test]
+fn a_joint_space_waypoint_is_planned_as_the_host_plans_it() {
+    // PIPS to a joint configuration as the target: the stream is the host's
+    // plan to the same configuration, bit for bit, and ends there.
+    let joints = pips::joints();
+    let mut goal = pips::home();
+    goal[0] += 0.6;
+    goal[7] -= 0.4;
+    goal[3] += 5.0;
+    let mut uart = FakeUart::new(usize::MAX);
+    for c in [
+        Command::Clear(Part::All),
+        Command::Preset(Preset::Pips),
+        Command::JointWaypoint {
+            index: 0,
+            joints: Joints::from_slice(&goal).unwrap(),
+        },
+        Command::Run {
+            every: 1,
+            error_change: None,
+        },
+    ] {
+        uart.send(&c);
+    }
+    let mut node = Node::<2048>::new();
+    for _ in 0..4 {
+        node.poll(&mut uart);
+    }
+    assert!(replies(&uart.tx)
+        .iter()
+        .all(|r| matches!(r, Reply::Ack { .. })));
+    uart.tx.clear();
+    for _ in 0..100_000 {
+        node.tick(1);
+        node.poll(&mut uart);
+        if node.status().state != State::Running && node.tx_len() == 0 {
+            break;
+        }
+    }
+    let streamed: Vec<Vec<f32>> = replies(&uart.tx)
+        .into_iter()
+        .filter_map(|r| match r {
+            Reply::Setpoint { joints, .. } => Some(joints.to_vec()),
+            _ => None,
+        })
+        .collect();
+    // The host.
+    let robot = Robot::<32>::new(&joints).unwrap();
+    let mission = Mission::<16>::new(
+        &[capp_core::Waypoint::at([0.0; 3])],
+        capp_core::Settings::default(),
+    )
+    .unwrap();
+    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    scenario.set_joint_goal(0, &goal).unwrap();
+    let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
+    let mut expected = std::vec![planner.joints().to_vec()];
+    let outcome = planner
+        .run(&scenario, |p, _| expected.push(p.joints().to_vec()))
+        .unwrap();
+    assert_eq!(outcome, capp_core::Outcome::Reached);
+    assert_eq!(node.status().outcome, Some(Outcome::Reached));
+    let bits = |v: &Vec<Vec<f32>>| {
+        v.iter()
+            .map(|q| q.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&streamed), bits(&expected));
+    // A fifth joint waypoint does not fit.
+    let mut uart = FakeUart::new(usize::MAX);
+    uart.send(&Command::Clear(Part::All));
+    uart.send(&Command::Preset(Preset::Pips));
+    for i in 0..5u8 {
+        uart.send(&Command::JointWaypoint {
+            index: i,
+            joints: Joints::from_slice(&goal).unwrap(),
+        });
+    }
+    let mut node = Node::<2048>::new();
+    for _ in 0..8 {
+        node.poll(&mut uart);
+    }
+    let r = replies(&uart.tx);
+    assert!(
+        matches!(
+            r.last(),
+            Some(Reply::Error {
+                code: ErrorCode::Capacity,
+                ..
+            })
+        ),
+        "{r:?}"
+    );
+}

@@ -7,7 +7,7 @@ use capp_core::escape::EscapeSettings;
 use capp_core::planner::Outcome as CoreOutcome;
 use capp_core::{JointKind as CoreKind, SuperEllipsoid};
 
-use crate::{Joint, JointKind, LawKind, Obstacle, Outcome, Settings, Waypoint};
+use crate::{EscapeMode, Joint, JointKind, LawKind, Obstacle, Outcome, Settings, Waypoint};
 
 impl From<CoreKind> for JointKind {
     fn from(k: CoreKind) -> Self {
@@ -217,5 +217,18 @@ pub fn setpoint_filter(
             orientation: c.orientation,
         },
         None => capp_core::SetpointFilter::Every(every.max(1)),
+    }
+}
+
+/// The escape's state as the board reports it: the mode and the attempt.
+pub fn escape_status(e: capp_core::escape::EscapeState) -> (EscapeMode, u8) {
+    use capp_core::escape::EscapeState as E;
+    {
+        match e {
+            E::Descending { attempts } => (EscapeMode::Descending, attempts),
+            E::Walking { attempt, .. } => (EscapeMode::Walking, attempt),
+            E::Detouring { attempt, .. } => (EscapeMode::Detouring, attempt),
+            E::Returning => (EscapeMode::Returning, 0),
+        }
     }
 }

@@ -28,7 +28,7 @@ pub mod cobs;
 #[cfg(feature = "core")]
 mod convert;
 #[cfg(feature = "core")]
-pub use convert::{run_command, setpoint_filter};
+pub use convert::{escape_status, run_command, setpoint_filter};
 pub mod crc;
 pub mod frame;
 
@@ -263,6 +263,15 @@ pub enum Command {
     Stop,
     /// 10: ask for a status.
     Status,
+    /// 11: append a waypoint that is a joint configuration (one value per
+    /// joint); `index` must equal the number of waypoints loaded (since
+    /// version 3). At most 4 per load.
+    JointWaypoint {
+        /// Index (0-based) among the waypoints; the last is the target.
+        index: u8,
+        /// The configuration, radians or length units.
+        joints: Joints,
+    },
 }
 
 impl Command {
@@ -280,6 +289,7 @@ impl Command {
             Command::Run { .. } => 8,
             Command::Stop => 9,
             Command::Status => 10,
+            Command::JointWaypoint { .. } => 11,
         }
     }
 }
@@ -385,6 +395,24 @@ pub struct Status {
     pub step_cycles_mean: u32,
     /// Most cycles one tick's work took in this plan (since version 3).
     pub step_cycles_max: u32,
+    /// What the dead-end escape is doing (since version 3).
+    pub escape: EscapeMode,
+    /// Escape attempts made for the current waypoint (since version 3).
+    pub escape_attempt: u8,
+}
+
+/// The planner's dead-end escape, as the board reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EscapeMode {
+    /// 0: not escaping: the law drives.
+    Descending,
+    /// 1: walking away from a dead end in joint space.
+    Walking,
+    /// 2: sending the end effector round the blocking obstacle.
+    Detouring,
+    /// 3: the attempts spent, back to the best configuration.
+    Returning,
 }
 
 /// Board to host.

@@ -244,6 +244,13 @@ fn every_command_is_pinned() {
     );
     check(&Command::Stop, &[0x09]);
     check(&Command::Status, &[0x0A]);
+    check(
+        &Command::JointWaypoint {
+            index: 2,
+            joints: Joints::from_slice(&[0.5, -1.0]).unwrap(),
+        },
+        &cat(&[&[0x0B, 0x02, 0x02], &HALF, &MINUS_ONE]),
+    );
 }
 
 /// capp-core's defaults, through the `core` conversion: the same bytes as above.
@@ -326,6 +333,8 @@ fn every_reply_is_pinned() {
         step_cycles_min: 1,
         step_cycles_mean: 300,
         step_cycles_max: 20_000,
+        escape: EscapeMode::Detouring,
+        escape_attempt: 3,
     };
     check(
         &Reply::Status(status),
@@ -338,6 +347,7 @@ fn every_reply_is_pinned() {
             &MINUS_ONE,
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
             &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
+            &[0x02, 0x03],
         ]),
     );
     let idle = Status {
@@ -356,6 +366,7 @@ fn every_reply_is_pinned() {
             &[0x00],
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
             &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
+            &[0x02, 0x03],
         ]),
     );
     for (i, s) in [State::Idle, State::Running, State::Done, State::Stopped]
