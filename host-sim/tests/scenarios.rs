@@ -1,5 +1,5 @@
 //! The shipped scenarios run end to end, reach their targets (the dead end
-//! stalls), and the independent checker accepts their trajectories; the
+//! stalls; the escape scenario reaches only by escaping), and the independent checker accepts their trajectories; the
 //! legacy `input.dat` and its TOML twin give the same trajectory; the checker
 //! rejects trajectories made to collide or to break a limit.
 
@@ -64,6 +64,31 @@ fn pips_payload_bay_reaches_around_the_payload() {
 #[test]
 fn pips_dead_end_stalls() {
     runs_and_checks("pips_dead_end.toml", Outcome::Stalled);
+}
+
+#[test]
+fn pips_escape_reaches_by_a_detour_and_stalls_without_escapes() {
+    use capp_core::escape::EscapeState;
+    let (problem, result) = plan("pips_escape.toml");
+    assert_eq!(result.outcome, Outcome::Reached);
+    let escaping = result
+        .rows
+        .iter()
+        .filter(|r| !matches!(r.escape, Some(EscapeState::Descending { .. }) | None))
+        .count();
+    assert!(escaping > 0, "reached without escaping");
+    let t = as_trajectory(&problem, &result);
+    let report = check::check(&problem, &t);
+    assert!(report.accepted() && report.reaches_target, "{report}");
+
+    // The same dead end without the escape: the law alone stalls there.
+    let mut alone = problem.clone();
+    alone.settings.escape.attempts = 0;
+    let s = alone.validate().unwrap();
+    let stalled = plan::run(&alone, &s, |_| {}).unwrap();
+    assert_eq!(stalled.outcome, Outcome::Stalled);
+    let last = stalled.rows.last().unwrap();
+    assert!(last.position_error > 1.0, "{}", last.position_error);
 }
 
 #[test]
