@@ -404,6 +404,21 @@ fn main() -> ! {
             line(law, 18, 8, "step", step);
         }
     }
+    // What escaping costs: every step of the two shipped dead ends.
+    for (name, scene) in [
+        ("pips_escape", scenes::pips_escape()),
+        ("pips_dead_end", scenes::pips_dead_end()),
+    ] {
+        match scene {
+            Ok(scene) => {
+                escape_costs(name, &scene, overhead);
+                // The bracket of pips_escape, the wall of pips_dead_end.
+                let blocking = scene.scenario.obstacles().len() as u8 - 1;
+                stall_costs(name, &scene, blocking);
+            }
+            Err(e) => hprintln!("M4F {} 18 0 error {:?}", name, e),
+        }
+    }
     if !cfg!(feature = "step-count-quick") {
         sweeps(overhead);
     }
@@ -411,6 +426,113 @@ fn main() -> ! {
     debug::exit(debug::EXIT_SUCCESS);
     loop {
         cortex_m::asm::wfi();
+    }
+}
+
+/// Every step of `scene` from its start to the end of the run, one at a
+/// time: the most instructions of a step in each escape state (plain
+/// descent, detour, walk, return to the best configuration), and of the
+/// steps that start an escape (the law's step plus choosing the detour or
+/// drawing and scoring the walk's candidates), with the step counts.
+fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u64) {
+    use capp_core::escape::EscapeState;
+    let sc = &scene.scenario;
+    let (n, m) = (scene.joints, sc.obstacles().len());
+    let Ok(mut planner) = Planner::new(sc, &scene.start[..n]) else {
+        hprintln!("M4F {} {} {} error start", name, n, m);
+        return;
+    };
+    const WHAT: [[&str; 3]; 5] = [
+        ["descend_max", "descend_mean", "descend_steps"],
+        ["detour_max", "detour_mean", "detour_steps"],
+        ["walk_max", "walk_mean", "walk_steps"],
+        ["return_max", "return_mean", "return_steps"],
+        ["escape_start_max", "escape_start_mean", "escape_start_steps"],
+    ];
+    let (mut max, mut total, mut steps) = ([0u64; 5], [0u64; 5], [0u64; 5]);
+    let mut previous = planner.last_report().escape;
+    while !planner.is_done() {
+        let mut state = previous;
+        let (_, one) = count(
+            1,
+            overhead,
+            &mut planner,
+            |_| {},
+            |p| {
+                if let Ok(report) = p.step(sc) {
+                    state = report.escape;
+                }
+            },
+        );
+        let descending = |s| matches!(s, EscapeState::Descending { .. });
+        let bucket = match state {
+            EscapeState::Descending { .. } => 0,
+            EscapeState::Detouring { .. } => 1,
+            EscapeState::Walking { .. } => 2,
+            EscapeState::Returning => 3,
+        };
+        let starts = descending(previous) && !descending(state);
+        for b in [Some(bucket), starts.then_some(4)].into_iter().flatten() {
+            max[b] = max[b].max(one);
+            total[b] += one;
+            steps[b] += 1;
+        }
+        previous = state;
+    }
+    for b in 0..WHAT.len() {
+        if let Some(mean) = (total[b] * 10).checked_div(steps[b]) {
+            let [max_name, mean_name, steps_name] = WHAT[b];
+            line(name, n, m, max_name, max[b] * 10);
+            line(name, n, m, mean_name, mean);
+            line(name, n, m, steps_name, steps[b] * 10);
+        }
+    }
+}
+
+/// What choosing an escape costs by itself (`Escape::on_stall`, the work a
+/// stall adds to its step), from the scene's state after the warm-up: a
+/// detour round obstacle `blocking` (placing the detour points), and a walk
+/// with no obstacle to go round (drawing and scoring the candidates, one
+/// forward kinematics pass each).
+fn stall_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, blocking: u8) {
+    use capp_core::escape::Escape;
+    use capp_core::kinematics::Frames;
+    let sc = &scene.scenario;
+    let (n, m) = (scene.joints, sc.obstacles().len());
+    let Ok(planner) = scenes::warm_up(scene) else {
+        hprintln!("M4F {} {} {} error warm-up", name, n, m);
+        return;
+    };
+    let Some(target) = sc.targets().first() else {
+        return;
+    };
+    let settings = sc.settings();
+    let fresh = Escape::<{ scenes::PIPS_JOINTS }>::new(settings.escape.seed, &scene.start[..n]);
+    let mu = [1.0f32; scenes::PIPS_JOINTS];
+    let mut scratch = Frames::default();
+    for (what, obstacle) in [("stall_detour", Some(blocking)), ("stall_walk", None)] {
+        let mut escape = fresh.clone();
+        let c = repeat(
+            REPS,
+            &mut escape,
+            |e| e.clone_from(&fresh),
+            |e| {
+                black_box(e.on_stall(
+                    &settings.escape,
+                    sc.robot(),
+                    sc.obstacles(),
+                    planner.joints(),
+                    planner.frames(),
+                    1.0,
+                    &mu[..n],
+                    obstacle,
+                    target.position,
+                    settings.avoidance.joint_margin,
+                    &mut scratch,
+                ));
+            },
+        );
+        line(name, n, m, what, c);
     }
 }
 

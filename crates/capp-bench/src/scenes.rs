@@ -11,6 +11,10 @@
 //! * [`chain`]: a serpentine chain of `n` revolute joints (alternating +-90 deg
 //!   twists, like the PIPS truss) of 160 in total length, from a gentle arc to
 //!   a reachable pose, with `m` equipment obstacles scattered the same way.
+//! * [`pips_escape`] and [`pips_dead_end`]: the shipped scenarios of those
+//!   names (`host-sim/scenarios/*.toml`, the same bits: a test plans both
+//!   ways), where the planner escapes a dead end, and where it spends its
+//!   escape budget and stalls. Their steps measure what escaping costs.
 //!
 //! Equipment is placed by a fixed pseudo-random sequence; a candidate is kept
 //! only when every avoidance point of the start configuration, and the target
@@ -252,6 +256,137 @@ fn pips_with(obstacles: usize, settings: Settings) -> Result<Scene<PIPS_JOINTS>,
     Ok(Scene {
         scenario,
         start,
+        joints: PIPS_JOINTS,
+    })
+}
+
+/// Start configuration of `pips_escape.toml` (radians, inches).
+pub const ESCAPE_START: [f32; PIPS_JOINTS] = [1.7488767, 0.91875106, 26.189531, 4.790437, 9.321205, 0.044500794, -0.2977069, -0.1940957, 0.36832595, -0.14385386, 0.23510557, -0.15288553, -0.2383629, 0.4276852, -0.47850445, -0.11956917, 0.85759807, -2.0284657];
+
+/// Target of `pips_escape.toml`: position (inches) and orientation rows.
+pub const ESCAPE_TARGET: ([f32; 3], [[f32; 3]; 3]) = (
+    [43.499966, 86.26843, 74.77125],
+    [[-0.3671241, -0.9034126, -0.2215076], [-0.8774934, 0.41537136, -0.23973325], [0.30858594, 0.10635959, -0.9452314]],
+);
+
+/// The obstacles of `pips_escape.toml`, in its order.
+pub fn escape_obstacles() -> [SuperEllipsoid; 10] {
+    [
+        // bay floor
+        SuperEllipsoid {
+            centre: [60.0, 50.0, -21.781511],
+            semi_axes: [250.0, 250.0, 10.0],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // aft bulkhead
+        SuperEllipsoid {
+            centre: [162.85605, 50.0, 40.0],
+            semi_axes: [10.0, 250.0, 250.0],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // forward bulkhead
+        SuperEllipsoid {
+            centre: [-42.22014, 50.0, 40.0],
+            semi_axes: [10.0, 250.0, 250.0],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // port wall
+        SuperEllipsoid {
+            centre: [60.0, -41.317497, 40.0],
+            semi_axes: [250.0, 5.0, 250.0],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // starboard wall
+        SuperEllipsoid {
+            centre: [60.0, 130.95128, 40.0],
+            semi_axes: [250.0, 5.0, 250.0],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // payload 1
+        SuperEllipsoid {
+            centre: [81.53505, 43.918125, 28.460999],
+            semi_axes: [21.078968, 18.533928, 18.533928],
+            exponents: [8.0, 2.0, 2.0],
+            euler_123: [0.0; 3],
+        },
+        // payload 2
+        SuperEllipsoid {
+            centre: [73.37061, 29.80678, 23.493156],
+            semi_axes: [21.355688, 17.077408, 17.077408],
+            exponents: [8.0, 2.0, 2.0],
+            euler_123: [0.0; 3],
+        },
+        // equipment 1
+        SuperEllipsoid {
+            centre: [137.65631, 47.02806, -6.9111066],
+            semi_axes: [9.947951, 6.965582, 4.870404],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // bracket near the base
+        SuperEllipsoid {
+            centre: [8.822459, 28.75585, 9.731408],
+            semi_axes: [2.1211357, 2.431463, 3.7460725],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+        // bracket (in the way)
+        SuperEllipsoid {
+            centre: [50.565792, 94.06789, 67.39671],
+            semi_axes: [3.1109095, 3.7510293, 1.4753368],
+            exponents: [8.0, 8.0, 8.0],
+            euler_123: [0.0; 3],
+        },
+    ]
+}
+
+/// `host-sim/scenarios/pips_escape.toml`: a dead end (a bracket on the
+/// end-effector path) the planner escapes by a detour, then reaches.
+pub fn pips_escape() -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
+    let settings = Settings {
+        position_tolerance: 0.1,
+        ..Settings::for_robot(&robot)
+    };
+    let mission = Mission::new(
+        &[Waypoint::pose(ESCAPE_TARGET.0, ESCAPE_TARGET.1)],
+        settings,
+    )
+    .map_err(ScenarioError::Mission)?;
+    let scenario = Scenario::new(robot, &escape_obstacles(), &mission)?;
+    Ok(Scene {
+        scenario,
+        start: ESCAPE_START,
+        joints: PIPS_JOINTS,
+    })
+}
+
+/// `host-sim/scenarios/pips_dead_end.toml`: from home toward a target walled
+/// in by a 600 in wall; no path exists, the escape spends its budget and the
+/// run ends stalled.
+pub fn pips_dead_end() -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
+    let settings = Settings {
+        stall_window: 300,
+        ..Settings::for_robot(&robot)
+    };
+    let mission = Mission::new(&[Waypoint::at([100.0, 40.0, 10.0])], settings)
+        .map_err(ScenarioError::Mission)?;
+    let wall = SuperEllipsoid {
+        centre: [14.142, -14.142, 0.0],
+        semi_axes: [3.0, 300.0, 300.0],
+        exponents: [8.0; 3],
+        euler_123: [0.0, 0.0, -core::f32::consts::FRAC_PI_4],
+    };
+    let scenario = Scenario::new(robot, &[wall], &mission)?;
+    Ok(Scene {
+        scenario,
+        start: pips::home(),
         joints: PIPS_JOINTS,
     })
 }

@@ -817,7 +817,9 @@ impl<const N: usize> Planner<N> {
         }
         self.pass_waypoints(scenario);
         if let Phase::Moving { .. } = self.phase {
-            if !escaping && self.stalled(&settings) {
+            // A refused step left the state as it was, so the next one would
+            // be refused the same way: a dead end now, not after the window.
+            if !escaping && (!accepted || self.stalled(&settings)) {
                 self.on_stall(scenario, &target);
             }
             if self.step >= settings.max_steps && !self.is_done() {
