@@ -364,6 +364,54 @@ pub fn tables(
     }
     let _ = writeln!(w);
 
+    let _ = writeln!(
+        w,
+        "### The laws, and what escaping a dead end costs (M4F, PIPS)"
+    );
+    let _ = writeln!(w);
+    let _ = writeln!(
+        w,
+        "One step of PIPS with 8 obstacles from the same state, by law: damped least squares (the default) {}, the gradient law {}, eq. 15 as printed {}.",
+        opt(counts.get("law_damped_least_squares", 18, 8, "step"), grouped),
+        opt(counts.get("law_gradient", 18, 8, "step"), grouped),
+        opt(counts.get("law_paper", 18, 8, "step"), grouped),
+    );
+    let _ = writeln!(w);
+    let _ = writeln!(w, "Every step of the two shipped dead ends, timed one at a time and grouped by what the escape was doing after it (`pips_escape.toml`: a detour round the bracket, then reached; `pips_dead_end.toml`: no path, so detours and walks until the 64 attempts are spent, the return to the best configuration, `Stalled`). A step's cost is set by its halvings (each one evaluates the arm again; at most `max_halvings` = 8), not by the escape; the steps that start an escape add `Escape::on_stall`, timed alone in the last column from the scene's warmed-up state.");
+    let _ = writeln!(w);
+    let _ = writeln!(w, "| scenario | obstacles | steps | law alone: mean / max | detour: mean / max | walk: mean / max | return: mean / max | steps that start an escape: count, mean / max | `on_stall` alone: detour / walk |");
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|");
+    for (scene, m) in [("pips_escape", 10), ("pips_dead_end", 1)] {
+        let get = |what: &str| counts.get(scene, 18, m, what);
+        let pair = |what: &str| match get(&format!("{what}_steps")) {
+            Some(_) => format!(
+                "{} / {}",
+                opt(get(&format!("{what}_mean")), grouped),
+                opt(get(&format!("{what}_max")), grouped)
+            ),
+            None => "-".into(),
+        };
+        let steps: Option<f64> = ["descend", "detour", "walk", "return"]
+            .iter()
+            .map(|w| get(&format!("{w}_steps")).unwrap_or(0.0))
+            .sum::<f64>()
+            .into();
+        let _ = writeln!(
+            w,
+            "| `{scene}` | {m} | {} | {} | {} | {} | {} | {}, {} | {} / {} |",
+            opt(steps, grouped),
+            pair("descend"),
+            pair("detour"),
+            pair("walk"),
+            pair("return"),
+            opt(get("escape_start_steps"), grouped),
+            pair("escape_start"),
+            opt(get("stall_detour"), grouped),
+            opt(get("stall_walk"), grouped),
+        );
+    }
+    let _ = writeln!(w);
+
     let _ = writeln!(w, "### Where the instructions go (M4F, PIPS)");
     let _ = writeln!(w);
     let _ = writeln!(w, "| obstacles | kinematics | control law | obstacles | projection + integration | sum of phases | step | rest (state machine, copies) | one pair within influence | one pair outside |");

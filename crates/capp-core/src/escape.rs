@@ -44,7 +44,7 @@
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{max, min, norm, Vec3};
 use crate::obstacle::Obstacle;
-use crate::robot::Robot;
+use crate::robot::{JointKind, Robot};
 
 /// Dead ends remembered per waypoint (a ring: the oldest is forgotten).
 pub const MEMORY: usize = 8;
@@ -87,9 +87,9 @@ pub struct EscapeSettings {
 impl Default for EscapeSettings {
     fn default() -> Self {
         EscapeSettings {
-            attempts: 40,
+            attempts: 64,
             window: 40,
-            walk_steps: 120,
+            walk_steps: 200,
             reach: 0.25,
             seed: 0x2545_F491,
         }
@@ -343,9 +343,17 @@ impl<const N: usize> Escape<N> {
         if let Some((o, obstacle)) = blocking.and_then(|o| Some((o, obstacles.get(o as usize)?))) {
             let tried = dead_end.detours as usize;
             if tried < DETOURS {
-                if let Some((point, side)) =
-                    detour(obstacle, o, hand, target, tried, robot.reach(), margin)
-                {
+                let mobile = |u: &Vec3| mobile(robot, frames, u);
+                if let Some((point, side)) = detour(
+                    obstacle,
+                    o,
+                    hand,
+                    target,
+                    tried,
+                    robot.reach(),
+                    margin,
+                    mobile,
+                ) {
                     if let Some(d) = self.memory.get_mut(slot) {
                         d.detours += 1;
                     }
@@ -439,10 +447,35 @@ impl<const N: usize> Escape<N> {
     }
 }
 
+/// Below this share of its average mobility the end effector counts as
+/// unable to move along a direction (a planar arm out of its plane).
+pub const IMMOBILE: f32 = 0.01;
+
+/// Whether the end effector at `frames` can move along the unit direction
+/// `u`: `|J_p^T u|^2` (what the joints can do along `u`) at least
+/// [`IMMOBILE`] times its mean over directions, `trace(J_p J_p^T) / 3`. O(n).
+fn mobile<const N: usize>(robot: &Robot<N>, frames: &Frames<N>, u: &Vec3) -> bool {
+    let p = frames.end_position();
+    let (mut along, mut total) = (0.0f32, 0.0f32);
+    for (j, joint) in robot.joints().iter().enumerate().take(frames.len()) {
+        let z = frames.axis(j);
+        let column = match joint.kind {
+            JointKind::Revolute => z.cross(&(p - frames.pivot(j))),
+            JointKind::Prismatic => z,
+        };
+        let a = column.dot(u);
+        along += a * a;
+        total += column.dot(&column);
+    }
+    along >= IMMOBILE * total / 3.0
+}
+
 /// The `which`-th best (shortest) detour round `obstacle` (index `index`)
 /// for a hand at `hand` aiming at `target`: a point `margin` plus 5 % of
 /// `reach` outside the obstacle's inflated bounding box, beside it across
-/// the blocked direction; `None` for an obstacle too big to go round.
+/// the blocked direction, on a side the hand can move toward (`mobile`); `None` for an obstacle too big to go round, or when fewer
+/// than `which + 1` such points exist.
+#[allow(clippy::too_many_arguments)]
 fn detour(
     obstacle: &Obstacle,
     index: u8,
@@ -451,6 +484,7 @@ fn detour(
     which: usize,
     reach: f32,
     margin: f32,
+    mobile: impl Fn(&Vec3) -> bool,
 ) -> Option<(Vec3, Side)> {
     let axes = obstacle.source().semi_axes;
     let rotation = obstacle.rotation();
@@ -488,6 +522,9 @@ fn detour(
             .zip(axes)
             .map(|(l, a)| l.abs() * (a + margin))
             .sum();
+        if !mobile(&u) {
+            continue;
+        }
         let point = centre + u * (extent + margin + 0.05 * reach);
         *slot = (norm(&(point - hand)) + norm(&(target - point)), point);
     }

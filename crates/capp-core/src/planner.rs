@@ -566,7 +566,12 @@ impl<const N: usize> Planner<N> {
         } else {
             NUMERIC_FLOOR * scenario.robot().reach()
         };
-        if settings.escape.attempts == 0 || self.now.error.v <= 0.5 * noise * noise {
+        // Farther from the base than the whole chain: no configuration
+        // reaches it, so there is nothing to escape to.
+        let out_of_reach = target.joints.is_none()
+            && norm(&target.position) > scenario.robot().reach() + settings.position_tolerance;
+        if settings.escape.attempts == 0 || out_of_reach || self.now.error.v <= 0.5 * noise * noise
+        {
             self.phase = Phase::Done(Outcome::Stalled);
             return;
         }
