@@ -190,6 +190,8 @@ pub enum Marker {
     Dot,
     /// A filled square.
     Bar,
+    /// A filled diamond with a dark outline (a place marked on a path).
+    Diamond,
 }
 
 /// A plotting box in pixels with its two scales and tick labels.
@@ -320,6 +322,7 @@ pub fn legend_marker(canvas: &mut Canvas, at: P2, color: Rgb, marker: Marker) {
             radius: 4.0,
             color,
         }),
+        Marker::Diamond => diamond(canvas, (x + 9.0, y), color),
         Marker::Bar => canvas.push(Shape::Polygon {
             points: vec![
                 (x + 3.0, y - 6.0),
@@ -332,6 +335,22 @@ pub fn legend_marker(canvas: &mut Canvas, at: P2, color: Rgb, marker: Marker) {
             clip: None,
         }),
     }
+}
+
+/// A diamond 10 px across centred at `at`: `color` inside a dark outline.
+pub fn diamond(canvas: &mut Canvas, at: P2, color: Rgb) {
+    let (x, y) = at;
+    let r = 5.0;
+    let points = vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)];
+    let mut outline = points.clone();
+    outline.push((x, y - r));
+    canvas.push(Shape::Polygon {
+        points,
+        fill: color,
+        opacity: 1.0,
+        clip: None,
+    });
+    canvas.push(Shape::line(outline, INK, 1.0));
 }
 
 /// A named list of values, one per category.
