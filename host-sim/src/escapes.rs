@@ -151,7 +151,9 @@ pub fn label(state: EscapeState) -> String {
 /// message for anything else it cannot read.
 pub fn parse_label(text: &str) -> Result<Option<EscapeState>, String> {
     let words: Vec<&str> = text.split_whitespace().collect();
-    let bad = || format!("\"{text}\" is not an escape state (walk K [obstacle O +x], detour K obstacle O -y, return)");
+    let bad = || {
+        format!("\"{text}\" is not an escape state (walk K [obstacle O +x], detour K obstacle O -y, return)")
+    };
     let attempt = |w: &str| w.parse::<u8>().ok().filter(|&a| a > 0);
     let side = |o: &str, s: &str| -> Option<Side> {
         let obstacle = o.parse::<u32>().ok()?.checked_sub(1)?;

@@ -265,7 +265,9 @@ fn escape_phrase(line: &EscapeLine) -> String {
     let s = &line.stretch;
     let side = s.side.map(escapes::side_name).unwrap_or_default();
     let what = match (s.kind, &line.obstacle) {
-        (Kind::Detour, Some(o)) => format!("detour at step {} round {o} on its {side} side", s.step),
+        (Kind::Detour, Some(o)) => {
+            format!("detour at step {} round {o} on its {side} side", s.step)
+        }
         (_, Some(o)) => format!("walk at step {} to the {side} side of {o}", s.step),
         (_, None) => format!("walk at step {} (no obstacle blocking)", s.step),
     };
@@ -281,9 +283,8 @@ impl fmt::Display for EscapeSummary {
             .iter()
             .filter(|l| l.stretch.kind == Kind::Detour)
             .count();
-        let plural = |k: usize, one: &str, many: &str| {
-            format!("{k} {}", if k == 1 { one } else { many })
-        };
+        let plural =
+            |k: usize, one: &str, many: &str| format!("{k} {}", if k == 1 { one } else { many });
         if n == 0 {
             writeln!(f, "escapes:           none")?;
         } else {
@@ -347,7 +348,9 @@ impl fmt::Display for EscapeSummary {
                                 };
                                 format!("{round}{o} {} ({what})", list.join(", "))
                             }
-                            None => format!("{} with no obstacle blocking", plural(k, "walk", "walks")),
+                            None => {
+                                format!("{} with no obstacle blocking", plural(k, "walk", "walks"))
+                            }
                         }
                     })
                     .collect();
