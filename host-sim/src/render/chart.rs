@@ -31,6 +31,7 @@ pub const PALETTE: [Rgb; 7] = [
 const GRID: Rgb = [232, 232, 232];
 const INK: Rgb = [30, 30, 30];
 const MUTED: Rgb = [90, 90, 90];
+const LIGHT: Rgb = [160, 160, 160];
 
 /// One axis: the data range drawn and whether it is logarithmic.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -399,6 +400,9 @@ pub struct ScatterChart {
     pub series: Vec<PointSeries>,
     /// Legend entry for a dashed `y = x` line, if one is wanted.
     pub diagonal: Option<String>,
+    /// Further dashed lines `y = k x` (e.g. a target of twice the bound),
+    /// lighter, with their legend entries; drawn only with `diagonal`.
+    pub slopes: Vec<(f64, String)>,
     /// Logarithmic axes (points with a coordinate <= 0 are left out).
     pub log: bool,
 }
@@ -532,6 +536,21 @@ pub fn scatter_chart(chart: &ScatterChart) -> Canvas {
             .collect();
         canvas.push(Shape::line(line, MUTED, 1.5).dashed().clipped(rect));
         items.push((name.clone(), MUTED, Marker::Dashed));
+        for (k, name) in &chart.slopes {
+            let line: Vec<P2> = (0..=64)
+                .filter_map(|i| {
+                    let t = i as f64 / 64.0;
+                    let v = if chart.log {
+                        axes.x.lo * (axes.x.hi / axes.x.lo).powf(t)
+                    } else {
+                        axes.x.lo + (axes.x.hi - axes.x.lo) * t
+                    };
+                    axes.map(v, k * v)
+                })
+                .collect();
+            canvas.push(Shape::line(line, LIGHT, 1.2).dashed().clipped(rect));
+            items.push((name.clone(), LIGHT, Marker::Dashed));
+        }
     }
     for (s, series) in chart.series.iter().enumerate() {
         let color = PALETTE[s % PALETTE.len()];
@@ -605,9 +624,12 @@ mod tests {
                 points: vec![(1.0, 0.5), (2.0, 2.5), (f64::NAN, 1.0)],
             }],
             diagonal: Some("y = bound".into()),
+            slopes: vec![(2.0, "y = 2 bound".into())],
             log: false,
         });
         assert_eq!(scatter.svg().matches("<circle").count(), 2 + 1);
-        assert!(scatter.svg().contains("stroke-dasharray"));
+        // The diagonal, the 2x line and their two legend swatches.
+        assert_eq!(scatter.svg().matches("stroke-dasharray").count(), 4);
+        assert!(scatter.svg().contains(">y = 2 bound</text>"));
     }
 }
