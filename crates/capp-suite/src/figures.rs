@@ -53,6 +53,13 @@ pub fn reach(families: &[Family], variants: &[Variant], results: &[CaseResult]) 
         .filter(|(_, of)| !of.is_empty())
         .collect();
     groups.push(("all".into(), results.iter().collect()));
+    let categories = groups
+        .iter()
+        .map(|(name, of)| {
+            let n = of.iter().filter(|r| certified(r)).count();
+            format!("{name} ({n})")
+        })
+        .collect();
     let series = variants
         .iter()
         .map(|v| Series {
@@ -74,9 +81,10 @@ pub fn reach(families: &[Family], variants: &[Variant], results: &[CaseResult]) 
         })
         .collect();
     bar_chart(&BarChart {
-        title: "Reached, % of the cases RRT-Connect certified solvable".into(),
+        title: "Reached, % of the cases RRT-Connect certified solvable (how many in brackets)"
+            .into(),
         y_label: "reached [% of certified]".into(),
-        categories: groups.into_iter().map(|g| g.0).collect(),
+        categories,
         series,
         y_max: Some(100.0),
     })
@@ -124,28 +132,32 @@ pub fn motion(families: &[Family], variant: &Variant, results: &[CaseResult]) ->
 }
 
 /// Writes both figures into `dir` (SVG and PNG); returns `(path relative
-/// to the repository, caption)` for the report, `dir` being `root/docs/img`.
+/// to the repository, alt text, caption)` for the report, `dir` being
+/// `root/docs/img`.
 pub fn write(
     dir: &Path,
     families: &[Family],
     variants: &[Variant],
     results: &[CaseResult],
-) -> Result<Vec<(String, String)>> {
+) -> Result<Vec<(String, String, String)>> {
     std::fs::create_dir_all(dir)?;
     let mut out = Vec::new();
     reach(families, variants, results).write(dir, REACH)?;
     out.push((
         format!("docs/img/{REACH}.png"),
+        "reach rate per family and variant".to_string(),
         "Reached, % of the RRT-certified cases, per family and variant (the tables' *reached % of certified*).".to_string(),
     ));
     if let Some(default) = variants.first() {
         motion(families, default, results).write(dir, MOTION)?;
         out.push((
             format!("docs/img/{MOTION}.png"),
+            "motion time against the RRT path".to_string(),
             format!(
                 "`{}`: each reached case the oracle solved, its motion time against the time of \
                  RRT-Connect's shortcut path at the rate limits (log axes); below the dashed \
-                 diagonal the planner's motion is the faster. Escaped runs in their own colour.",
+                 diagonal the planner's motion is the faster, above the lighter one it takes more \
+                 than twice as long. Escaped runs in their own colour.",
                 default.name
             ),
         ));

@@ -476,7 +476,21 @@ pub fn bar_chart(chart: &BarChart) -> Canvas {
         .map(|(s, series)| (series.name.clone(), PALETTE[s % PALETTE.len()], Marker::Bar))
         .collect();
     if items.len() > 1 {
-        axes.legend(&mut canvas, &items);
+        // A row under the category names: bars reach the top, where a
+        // legend box would cover them.
+        let size = 11.0;
+        let width: f64 = items
+            .iter()
+            .map(|(n, ..)| 24.0 + font::width(n, size) + 18.0)
+            .sum::<f64>()
+            - 18.0;
+        let mut x = ((rect.0 + rect.2 - width) / 2.0).max(rect.0);
+        let y = rect.3 + 42.0;
+        for (name, color, marker) in &items {
+            legend_marker(&mut canvas, (x, y), *color, *marker);
+            canvas.push(Shape::text((x + 24.0, y + 4.0), size, name.clone()).colored(INK));
+            x += 24.0 + font::width(name, size) + 18.0;
+        }
     }
     canvas
 }
