@@ -251,6 +251,47 @@ impl EscapeSummary {
     }
 }
 
+/// The escapes of one kind past one obstacle (`None`: no obstacle blocking)
+/// and how often each side was taken, the most used first.
+struct SideGroup {
+    kind: Kind,
+    obstacle: Option<String>,
+    sides: Vec<(String, usize)>,
+}
+
+/// `attempts` grouped by kind and obstacle, the largest group first.
+fn side_groups(attempts: &[EscapeLine]) -> Vec<SideGroup> {
+    let mut groups: Vec<SideGroup> = Vec::new();
+    for l in attempts {
+        let (kind, obstacle) = (l.stretch.kind, l.obstacle.clone());
+        let side = l.stretch.side.map(escapes::side_name).unwrap_or_default();
+        let at = match groups
+            .iter()
+            .position(|g| g.kind == kind && g.obstacle == obstacle)
+        {
+            Some(i) => i,
+            None => {
+                groups.push(SideGroup {
+                    kind,
+                    obstacle,
+                    sides: Vec::new(),
+                });
+                groups.len() - 1
+            }
+        };
+        let sides = &mut groups[at].sides;
+        match sides.iter_mut().find(|s| s.0 == side) {
+            Some(s) => s.1 += 1,
+            None => sides.push((side, 1)),
+        }
+    }
+    for g in &mut groups {
+        g.sides.sort_by_key(|s| std::cmp::Reverse(s.1));
+    }
+    groups.sort_by_key(|g| std::cmp::Reverse(g.sides.iter().map(|s| s.1).sum::<usize>()));
+    groups
+}
+
 /// Four decimals in a readable range, else scientific.
 fn value(v: f32) -> String {
     if v != 0.0 && !(1e-3..1e5).contains(&v.abs()) {
@@ -312,37 +353,17 @@ impl fmt::Display for EscapeSummary {
                     steps.join(", ")
                 };
                 writeln!(f, ", starting at steps {shown}")?;
-                // Sides: per kind and obstacle, the most used first.
-                let mut groups: Vec<((Kind, Option<String>), Vec<(String, usize)>)> = Vec::new();
-                for l in &self.attempts {
-                    let key = (l.stretch.kind, l.obstacle.clone());
-                    let side = l.stretch.side.map(escapes::side_name).unwrap_or_default();
-                    let at = match groups.iter().position(|g| g.0 == key) {
-                        Some(i) => i,
-                        None => {
-                            groups.push((key, Vec::new()));
-                            groups.len() - 1
-                        }
-                    };
-                    let sides = &mut groups[at].1;
-                    match sides.iter_mut().find(|s| s.0 == side) {
-                        Some(s) => s.1 += 1,
-                        None => sides.push((side, 1)),
-                    }
-                }
-                let total = |g: &Vec<(String, usize)>| g.iter().map(|s| s.1).sum::<usize>();
-                groups.sort_by(|a, b| total(&b.1).cmp(&total(&a.1)));
+                let groups = side_groups(&self.attempts);
                 let parts: Vec<String> = groups
-                    .iter_mut()
+                    .iter()
                     .take(3)
-                    .map(|((kind, obstacle), sides)| {
-                        sides.sort_by(|a, b| b.1.cmp(&a.1));
-                        let k = total(sides);
-                        match obstacle {
+                    .map(|g| {
+                        let k: usize = g.sides.iter().map(|s| s.1).sum();
+                        match &g.obstacle {
                             Some(o) => {
                                 let list: Vec<String> =
-                                    sides.iter().map(|(s, c)| format!("{s} {c}")).collect();
-                                let (round, what) = match kind {
+                                    g.sides.iter().map(|(s, c)| format!("{s} {c}")).collect();
+                                let (round, what) = match g.kind {
                                     Kind::Detour => ("round ", plural(k, "detour", "detours")),
                                     _ => ("", plural(k, "walk", "walks")),
                                 };
