@@ -401,9 +401,9 @@ pub fn markdown_with_figures(
 
     // Figures (a full run writes them).
     if !figures.is_empty() {
-        s.push_str("\n## Figures\n\n");
+        s.push_str("\n## Figures\n");
         for (path, alt, caption) in figures {
-            let _ = writeln!(s, "![{alt}]({path})\n\n{caption}\n");
+            let _ = writeln!(s, "\n![{alt}]({path})\n\n{caption}");
         }
     }
 
