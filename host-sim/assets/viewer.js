@@ -124,6 +124,27 @@
     if (i === RUN.waypoints.length - 1) legendRow('#149640', w.axes ? 'target and its frame (x red, y green, z blue)' : 'target');
   });
   legendRow('#202020', 'end-effector path');
+  // The escapes: each stretch of the path in its kind's colour, a dot where it started.
+  const escapeNames = { detour: 'detour round an obstacle', walk: 'walk from a dead end', return: 'return to the best configuration' };
+  const shownKinds = new Set();
+  RUN.escapes.forEach((e) => {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.Float32BufferAttribute(e.path, 3));
+    const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: e.colour }));
+    line.renderOrder = 1; // after the black path it lies on, so it wins where they coincide
+    scene.add(line);
+    if (e.kind !== 'return') {
+      const dot = new THREE.Mesh(new THREE.SphereGeometry(0.8 * RUN.radius, 12, 8), new THREE.MeshLambertMaterial({ color: e.colour }));
+      dot.position.set(e.path[0], e.path[1], e.path[2]);
+      scene.add(dot);
+    }
+    if (!shownKinds.has(e.kind)) {
+      shownKinds.add(e.kind);
+      legendRow(e.colour, escapeNames[e.kind] + (e.kind === 'return' ? '' : ' (dot: where it started)'));
+    }
+  });
+  const escapeColours = {};
+  RUN.escapes.forEach((e) => { escapeColours[e.kind] = e.colour; });
   legendRow('#d05a28', 'links; their end-effector frame');
   legendRow('#8a929e', 'grid: ' + RUN.grid + ' ' + RUN.unit + ' squares; world frame at the origin');
 
@@ -193,6 +214,10 @@
     pose(f);
     seek.value = f;
     fields.forEach(([, value], i) => { values[i].textContent = value(f); });
+    const now = RUN.escape[f];
+    $('escape-text').textContent = 'escape: ' + (now === null ? 'none (the law drives)' : now);
+    const kind = now === null ? null : now.split(' ')[0];
+    $('escape-swatch').style.background = (kind && escapeColours[kind]) || 'transparent';
   }
   function setPlaying(on) {
     playing = on;

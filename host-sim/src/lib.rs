@@ -13,6 +13,7 @@
 //! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
 //! | [`legacy`] | CAPP.c's `input.dat` reader and `joints.dat` writer |
 //! | [`plan`] | running the planner and recording every step |
+//! | [`escapes`] | where a run escaped dead ends (walks, detours, the return), and the CSV's `escape` column |
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
 //! | [`trajectory`] | reading a trajectory CSV back |
 //! | [`check`] | the independent f64 checker (own kinematics, own super-ellipsoids) |
@@ -26,6 +27,7 @@
 
 pub mod check;
 pub mod cli;
+pub mod escapes;
 pub mod legacy;
 pub mod output;
 pub mod plan;

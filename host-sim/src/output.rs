@@ -18,9 +18,10 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use capp_core::escape::{EscapeState, Side};
+use capp_core::escape::EscapeState;
 use capp_core::Outcome;
 
+use crate::escapes::{self, Kind, Stretch};
 use crate::plan::{Row, RunResult};
 use crate::problem::{Problem, SourceKind};
 
@@ -63,31 +64,11 @@ pub fn outcome_name(outcome: Outcome) -> &'static str {
     }
 }
 
-/// What the `escape` column says: empty while the law drives, else
-/// `walk K`, `detour K obstacle O +z` (1-based attempt and obstacle, the side
-/// of the obstacle in its own frame) or `return`.
+/// What the `escape` column says ([`crate::escapes::label`]): empty while
+/// the law drives, else `walk K`, `detour K obstacle O +z` (1-based attempt
+/// and obstacle, the side of the obstacle in its own frame) or `return`.
 pub fn escape_label(state: EscapeState) -> String {
-    let side = |s: Side| {
-        format!(
-            "obstacle {} {}{}",
-            s.obstacle as u32 + 1,
-            if s.positive { '+' } else { '-' },
-            ['x', 'y', 'z'][(s.axis as usize).min(2)]
-        )
-    };
-    match state {
-        EscapeState::Descending { .. } => String::new(),
-        EscapeState::Walking {
-            attempt,
-            side: None,
-        } => format!("walk {attempt}"),
-        EscapeState::Walking {
-            attempt,
-            side: Some(s),
-        } => format!("walk {attempt} {}", side(s)),
-        EscapeState::Detouring { attempt, side: s } => format!("detour {attempt} {}", side(s)),
-        EscapeState::Returning => "return".into(),
-    }
+    crate::escapes::label(state)
 }
 
 /// The CSV header for `n` joints.
@@ -171,6 +152,262 @@ pub struct Summary {
     pub unit: String,
     /// For a plan received from a board: what happened on the line.
     pub link: Option<crate::serial::LinkReport>,
+    /// Where the planner escaped dead ends (`None`: not known, a plan
+    /// received from a board).
+    pub escapes: Option<EscapeSummary>,
+}
+
+/// One escape motion, as the summary tells it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EscapeLine {
+    /// The stretch of rows.
+    pub stretch: Stretch,
+    /// Steps it took.
+    pub steps: u32,
+    /// The blocking obstacle, in words (`"payload 1"`, or `obstacle 3` when unnamed).
+    pub obstacle: Option<String>,
+}
+
+/// The walk back to the best configuration once the attempts are spent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Return {
+    /// `V` at the end of the run.
+    pub v: f32,
+    /// The lowest `V` the law reached for that waypoint, and its step.
+    pub best: (f32, u32),
+    /// Steps the return took.
+    pub steps: u32,
+}
+
+/// The dead-end escapes of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EscapeSummary {
+    /// Every walk and detour, in order (the return is [`EscapeSummary::returned`]).
+    pub attempts: Vec<EscapeLine>,
+    /// The run ended by walking back to the best configuration.
+    pub returned: Option<Return>,
+    /// How the run ended.
+    pub outcome: Outcome,
+    /// Length unit name (for `V`).
+    pub unit: String,
+}
+
+/// At most this many escapes are listed one per line; more are summarised.
+const LISTED: usize = 3;
+
+impl EscapeSummary {
+    /// The escapes of recorded plan rows; `None` when the rows do not know
+    /// them (received from a board).
+    pub fn new(problem: &Problem, result: &RunResult) -> Option<EscapeSummary> {
+        let rows = &result.rows[..];
+        if rows.iter().any(|r| r.escape.is_none()) {
+            return None;
+        }
+        let name = |o: u8| match problem.obstacle_names.get(o as usize) {
+            Some(n) if !n.is_empty() => format!("\"{n}\""),
+            _ => format!("obstacle {}", o as u32 + 1),
+        };
+        let stretches = escapes::of_rows(rows);
+        let attempts = stretches
+            .iter()
+            .filter(|s| s.kind != Kind::Return)
+            .map(|s| EscapeLine {
+                stretch: *s,
+                steps: rows[s.end(rows.len())].step - rows[s.first].step,
+                obstacle: s.side.map(|side| name(side.obstacle)),
+            })
+            .collect();
+        let returned = stretches
+            .iter()
+            .find(|s| s.kind == Kind::Return)
+            .and_then(|s| {
+                let last = rows.last()?;
+                // The law's rows of that waypoint: those whose step the law drove.
+                let (best, step) = rows
+                    .windows(2)
+                    .filter(|w| {
+                        w[1].waypoint == s.waypoint
+                            && w[0].escape.and_then(escapes::classify).is_none()
+                    })
+                    .map(|w| (w[1].v, w[1].step))
+                    .chain(
+                        rows.iter()
+                            .find(|r| r.waypoint == s.waypoint)
+                            .map(|r| (r.v, r.step)),
+                    )
+                    .min_by(|a, b| a.0.total_cmp(&b.0))?;
+                Some(Return {
+                    v: last.v,
+                    best: (best, step),
+                    steps: last.step - rows[s.first].step,
+                })
+            });
+        Some(EscapeSummary {
+            attempts,
+            returned,
+            outcome: result.outcome,
+            unit: problem.length_unit.clone(),
+        })
+    }
+}
+
+/// The escapes of one kind past one obstacle (`None`: no obstacle blocking)
+/// and how often each side was taken, the most used first.
+struct SideGroup {
+    kind: Kind,
+    obstacle: Option<String>,
+    sides: Vec<(String, usize)>,
+}
+
+/// `attempts` grouped by kind and obstacle, the largest group first.
+fn side_groups(attempts: &[EscapeLine]) -> Vec<SideGroup> {
+    let mut groups: Vec<SideGroup> = Vec::new();
+    for l in attempts {
+        let (kind, obstacle) = (l.stretch.kind, l.obstacle.clone());
+        let side = l.stretch.side.map(escapes::side_name).unwrap_or_default();
+        let at = match groups
+            .iter()
+            .position(|g| g.kind == kind && g.obstacle == obstacle)
+        {
+            Some(i) => i,
+            None => {
+                groups.push(SideGroup {
+                    kind,
+                    obstacle,
+                    sides: Vec::new(),
+                });
+                groups.len() - 1
+            }
+        };
+        let sides = &mut groups[at].sides;
+        match sides.iter_mut().find(|s| s.0 == side) {
+            Some(s) => s.1 += 1,
+            None => sides.push((side, 1)),
+        }
+    }
+    for g in &mut groups {
+        g.sides.sort_by_key(|s| std::cmp::Reverse(s.1));
+    }
+    groups.sort_by_key(|g| std::cmp::Reverse(g.sides.iter().map(|s| s.1).sum::<usize>()));
+    groups
+}
+
+/// Four decimals in a readable range, else scientific.
+fn value(v: f32) -> String {
+    if v != 0.0 && !(1e-3..1e5).contains(&v.abs()) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
+/// `"box" on its -x side`-style phrases for one escape.
+fn escape_phrase(line: &EscapeLine) -> String {
+    let s = &line.stretch;
+    let side = s.side.map(escapes::side_name).unwrap_or_default();
+    let what = match (s.kind, &line.obstacle) {
+        (Kind::Detour, Some(o)) => {
+            format!("detour at step {} round {o} on its {side} side", s.step)
+        }
+        (_, Some(o)) => format!("walk at step {} to the {side} side of {o}", s.step),
+        (_, None) => format!("walk at step {} (no obstacle blocking)", s.step),
+    };
+    format!("{what}, {} steps", line.steps)
+}
+
+impl fmt::Display for EscapeSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const INDENT: &str = "                   ";
+        let n = self.attempts.len();
+        let detours = self
+            .attempts
+            .iter()
+            .filter(|l| l.stretch.kind == Kind::Detour)
+            .count();
+        let plural =
+            |k: usize, one: &str, many: &str| format!("{k} {}", if k == 1 { one } else { many });
+        if n == 0 {
+            writeln!(f, "escapes:           none")?;
+        } else {
+            write!(
+                f,
+                "escapes:           {} ({}, {})",
+                plural(n, "attempt", "attempts"),
+                plural(detours, "detour", "detours"),
+                plural(n - detours, "walk", "walks")
+            )?;
+            if n <= LISTED {
+                writeln!(f)?;
+                for line in &self.attempts {
+                    writeln!(f, "{INDENT}{}", escape_phrase(line))?;
+                }
+            } else {
+                let steps: Vec<String> = self
+                    .attempts
+                    .iter()
+                    .map(|l| l.stretch.step.to_string())
+                    .collect();
+                let shown = if n > 6 {
+                    format!("{}, ..., {}", steps[..5].join(", "), steps[n - 1])
+                } else {
+                    steps.join(", ")
+                };
+                writeln!(f, ", starting at steps {shown}")?;
+                let groups = side_groups(&self.attempts);
+                let parts: Vec<String> = groups
+                    .iter()
+                    .take(3)
+                    .map(|g| {
+                        let k: usize = g.sides.iter().map(|s| s.1).sum();
+                        match &g.obstacle {
+                            Some(o) => {
+                                let list: Vec<String> =
+                                    g.sides.iter().map(|(s, c)| format!("{s} {c}")).collect();
+                                let (round, what) = match g.kind {
+                                    Kind::Detour => ("round ", plural(k, "detour", "detours")),
+                                    _ => ("", plural(k, "walk", "walks")),
+                                };
+                                format!("{round}{o} {} ({what})", list.join(", "))
+                            }
+                            None => {
+                                format!("{} with no obstacle blocking", plural(k, "walk", "walks"))
+                            }
+                        }
+                    })
+                    .collect();
+                let more = if groups.len() > 3 { "; ..." } else { "" };
+                writeln!(f, "{INDENT}sides: {}{more}", parts.join("; "))?;
+            }
+        }
+        if let Some(r) = self.returned {
+            let unit = &self.unit;
+            let ended = match self.outcome {
+                Outcome::Stalled => format!(
+                    "stalled after {}",
+                    plural(n, "escape attempt", "escape attempts")
+                ),
+                other => format!("{} during the return", outcome_name(other)),
+            };
+            let (best, step) = r.best;
+            if (r.v - best).abs() <= 1e-3 * best.abs() + f32::EPSILON {
+                writeln!(
+                    f,
+                    "{INDENT}{ended}; held the best configuration, V = {} {unit}²",
+                    value(r.v)
+                )?;
+            } else {
+                // The return is a straight joint-space walk: it can be blocked.
+                writeln!(
+                    f,
+                    "{INDENT}{ended}; the return to the best configuration (V = {} {unit}², step {step}) ended after {}, at V = {} {unit}²",
+                    value(best),
+                    plural(r.steps as usize, "step", "steps"),
+                    value(r.v)
+                )?;
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Summary {
@@ -228,6 +465,7 @@ impl Summary {
             wall_time_s: result.wall_time.as_secs_f64(),
             unit: problem.length_unit.clone(),
             link: None,
+            escapes: EscapeSummary::new(problem, result),
         }
     }
 }
@@ -263,6 +501,9 @@ impl fmt::Display for Summary {
             100.0 * self.range_use.0,
             self.range_use.1
         )?;
+        if let Some(escapes) = &self.escapes {
+            write!(f, "{escapes}")?;
+        }
         writeln!(f, "setpoints:         {}", self.setpoints)?;
         writeln!(f, "wall time:         {:.3} s", self.wall_time_s)?;
         if let Some(link) = &self.link {

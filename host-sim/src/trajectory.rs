@@ -1,7 +1,8 @@
 //! Reading a trajectory CSV (as [`crate::output`] writes it) back.
 //!
 //! Required columns: `h_s` and `q1..qn`. `step`, `x y z`, `v`,
-//! `position_error`, `orientation_error` and `clearance` are read when present.
+//! `position_error`, `orientation_error`, `clearance` and `escape` are read
+//! when present.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -29,6 +30,10 @@ pub struct TrajectoryRow {
     pub orientation_error: Option<f64>,
     /// Recorded clearance `C - 1`, if present and not empty.
     pub clearance: Option<f64>,
+    /// The escape motion under way after this row's step (walk, detour,
+    /// return; see [`crate::escapes`]); `None` while the law drives, or
+    /// when not recorded.
+    pub escape: Option<capp_core::escape::EscapeState>,
 }
 
 /// A joint trajectory.
@@ -41,6 +46,13 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
+    /// Where the run escaped dead ends.
+    pub fn escapes(&self) -> Vec<crate::escapes::Stretch> {
+        // The waypoint column is not read; a new waypoint restarts the
+        // attempts, so the attempt number still separates stretches.
+        crate::escapes::stretches(self.rows.iter().map(|r| (r.step as u32, 0, r.escape)))
+    }
+
     /// The rows of a plan, as a trajectory file would give them back (the
     /// `f32` values widened exactly; `line` is the row's line in a CSV with a
     /// header).
@@ -60,6 +72,7 @@ impl Trajectory {
                     position_error: Some(r.position_error as f64),
                     orientation_error: Some(r.orientation_error as f64),
                     clearance: r.clearance.map(|c| c.value as f64),
+                    escape: r.escape.filter(|&e| crate::escapes::classify(e).is_some()),
                 })
                 .collect(),
         }
@@ -102,6 +115,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
         .collect();
     let col = |name: &str| index.get(name).copied();
     let (step_col, x_col, y_col, z_col) = (col("step"), col("x"), col("y"), col("z"));
+    let escape_col = col("escape");
     let (v_col, pe_col, oe_col, c_col) = (
         col("v"),
         col("position_error"),
@@ -141,6 +155,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
             }
             _ => None,
         };
+        let escape = match escape_col {
+            Some(c) => crate::escapes::parse_label(record.get(c).unwrap_or(""))
+                .map_err(|e| LoadError::new(path, Some(line), format!("column `escape`: {e}")))?,
+            None => None,
+        };
         rows.push(TrajectoryRow {
             line,
             step: match step_col {
@@ -154,6 +173,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
             position_error: optional(pe_col, "position_error")?,
             orientation_error: optional(oe_col, "orientation_error")?,
             clearance: optional(c_col, "clearance")?,
+            escape,
         });
     }
     if rows.is_empty() {

@@ -70,7 +70,17 @@ fn rendered_files_are_valid_and_not_blank() {
             "arm.svg: {label}"
         );
     }
+    // The payload bay is reached without an escape: nothing drawn for one.
+    for colour in [views::DETOUR, views::WALK, views::RETURN] {
+        let stroke = format!(
+            "stroke=\"#{:02x}{:02x}{:02x}\"",
+            colour[0], colour[1], colour[2]
+        );
+        assert!(!arm.contains(&stroke), "arm.svg: {stroke}");
+    }
+    assert!(!arm.contains("escape started"));
     let plots = std::fs::read_to_string(dir.path().join("plots.svg")).unwrap();
+    assert!(!plots.contains("(shaded)"));
     for label in ["V [in²]", "step", "orientation", "C − 1"] {
         assert!(
             plots.contains(&format!(">{label}</text>")),
@@ -115,6 +125,10 @@ fn rendered_files_are_valid_and_not_blank() {
     let run = viewer.split("const RUN = ").nth(1).unwrap();
     let run = run.split("</script>").next().unwrap();
     assert!(!run.contains("NaN") && !run.contains("inf"));
+    assert!(
+        run.contains("\"escapes\": [],"),
+        "no escapes in the payload bay"
+    );
 
     let file = std::fs::File::open(dir.path().join("motion.gif")).unwrap();
     let mut options = gif::DecodeOptions::new();

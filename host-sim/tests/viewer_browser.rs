@@ -59,6 +59,11 @@ struct Output {
 /// after ten minutes (a guard against hanging the suite, not a speed test).
 /// Its output goes to files, so a chatty browser cannot fill a pipe and stall.
 fn browse(exe: &Path, page: &Path, extra: &[String]) -> Output {
+    browse_url(exe, &format!("file://{}", page.display()), extra)
+}
+
+/// [`browse`] on a URL (e.g. with a `#frame=N`).
+fn browse_url(exe: &Path, url: &str, extra: &[String]) -> Output {
     let scratch = tempfile::tempdir().unwrap();
     let (out, err) = (scratch.path().join("stdout"), scratch.path().join("stderr"));
     let mut child = Command::new(exe)
@@ -68,7 +73,7 @@ fn browse(exe: &Path, page: &Path, extra: &[String]) -> Output {
             scratch.path().join("profile").display()
         ))
         .args(extra)
-        .arg(format!("file://{}", page.display()))
+        .arg(url)
         .stdin(Stdio::null())
         .stdout(std::fs::File::create(&out).unwrap())
         .stderr(std::fs::File::create(&err).unwrap())
@@ -186,4 +191,59 @@ fn viewer_draws_in_a_real_browser() {
     assert!(drawn * 50 > area, "only {drawn} of {area} pixels drawn");
     assert!(colours.len() > 50, "{} colours", colours.len());
     assert!(orange > 200, "{orange} pixels of links");
+}
+
+/// The side panel says which escape the step is in: the planar arm of
+/// `tests/escapes.rs` detours round a post, and the page opened at a frame
+/// of the detour shows it.
+#[test]
+fn viewer_shows_the_escape_under_way() {
+    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
+    let Some(exe) = chromium() else {
+        assert!(
+            !required,
+            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
+        );
+        eprintln!("SKIPPED viewer_shows_the_escape_under_way: no Chromium found");
+        return;
+    };
+    let joint = "[[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n";
+    let text = format!(
+        "name = \"detour\"\nstart = [0.0, 0.5, 0.5]\n\
+         [units]\nangle = \"radians\"\nlength = \"inches\"\n\
+         {joint}{joint}{joint}\
+         [target]\nposition = [24.2, -13.2, 0.0]\n\
+         [[obstacles]]\nname = \"post\"\ncentre = [25.0, 0.0, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
+         [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("detour.toml");
+    std::fs::write(&file, text).unwrap();
+    let problem = Problem::load(&file).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
+    let html = viewer(&problem, &t);
+    let page = dir.path().join("viewer.html");
+    std::fs::write(&page, &html).unwrap();
+    // The first frame of the detour, from the page's own data.
+    let states = html.split("\"escape\": [").nth(1).unwrap();
+    let states = states.split("],").next().unwrap();
+    let frame = states
+        .split(',')
+        .position(|s| s.starts_with("\"detour 1"))
+        .expect("a frame of the detour");
+    let dom = |at: usize| {
+        let url = format!("file://{}#frame={at}", page.display());
+        browse_url(&exe, &url, &["--dump-dom".to_string()]).stdout
+    };
+    let during = dom(frame);
+    assert!(during.contains("<title>ok "), "{during}");
+    assert!(
+        during.contains("escape: detour 1 round \"post\", its −x side"),
+        "the panel does not show the detour:\n{during}"
+    );
+    let before = dom(0);
+    assert!(before.contains("escape: none (the law drives)"), "{before}");
 }

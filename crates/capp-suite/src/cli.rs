@@ -1,8 +1,8 @@
 //! `cargo xtask suite`: generate, plan, certify, report.
 //!
 //! ```text
-//! cargo xtask suite                 full run: writes PLANNING.md, target/suite/results.csv,
-//!                                   target/suite/cases/ (every run that did not reach)
+//! cargo xtask suite                 full run: writes PLANNING.md, its figures docs/img/planning_*.{svg,png},
+//!                                   target/suite/results.csv, target/suite/cases/ (every run that did not reach)
 //! cargo xtask suite --quick         4 cases per family, prints the report, writes nothing
 //!   --seed N                        another seed (default 1)
 //!   --family NAME[,NAME]            only these families
@@ -13,7 +13,7 @@
 //!   --write-cases DIR               also write every case file to DIR
 //! ```
 //!
-//! Only a full run (no option narrowing it) rewrites `PLANNING.md`; any other
+//! Only a full run (no option narrowing it) rewrites `PLANNING.md` and its figures; any other
 //! prints the report and writes only under `target/suite/` (nothing with `--quick`).
 
 use std::path::{Path, PathBuf};
@@ -24,6 +24,7 @@ use anyhow::{bail, Context, Result};
 use capp_core::Outcome;
 
 use crate::families::{self, Family};
+use crate::figures;
 use crate::oracle::Budget;
 use crate::report::{self, RunInfo, ShippedRun};
 use crate::runner::{self, CaseResult};
@@ -250,7 +251,14 @@ pub fn main(args: &[String], root: &Path) -> Result<()> {
         budget,
         command,
     };
-    let text = report::markdown(&info, &families, &variants, &results, &shipped);
+    // The figures go with PLANNING.md: only a full run draws them.
+    let figures = if options.is_full() {
+        figures::write(&root.join("docs/img"), &families, &variants, &results)?
+    } else {
+        Vec::new()
+    };
+    let text =
+        report::markdown_with_figures(&info, &families, &variants, &results, &shipped, &figures);
     if options.quick {
         println!("{text}");
         return Ok(());
@@ -284,7 +292,12 @@ pub fn main(args: &[String], root: &Path) -> Result<()> {
     if options.is_full() {
         std::fs::write(root.join("PLANNING.md"), &text)?;
         eprintln!(
-            "suite: wrote PLANNING.md ({:.0} s)",
+            "suite: wrote PLANNING.md and {} ({:.0} s)",
+            figures
+                .iter()
+                .map(|f| f.0.trim_end_matches(".png").to_string() + ".{svg,png}")
+                .collect::<Vec<_>>()
+                .join(", "),
             started.elapsed().as_secs_f64()
         );
     } else {

@@ -15,6 +15,7 @@
 //! | [`metrics`] | what one run is measured by (safety from the independent checker) |
 //! | [`runner`] | planning every case with every variant on a few threads |
 //! | [`report`] | the markdown tables and the per-case CSV |
+//! | [`figures`] | the report's charts (reach rate, motion time against the RRT path) |
 //! | [`cli`] | `cargo xtask suite` |
 //!
 //! Nothing here is used by the planner; the planner code under test is
@@ -25,6 +26,7 @@
 pub mod case;
 pub mod cli;
 pub mod families;
+pub mod figures;
 pub mod metrics;
 pub mod oracle;
 pub mod report;

@@ -11,9 +11,16 @@
 //! max_rate_j`; `straight_time` the straight joint-space line from the start
 //! to the final configuration at the rate limits, `max_j |q_end_j -
 //! q_start_j| / max_rate_j`.
+//!
+//! Escapes (`capp_core::escape`) are counted from the planner's step reports
+//! ([`capp_sim::escapes`]): walks and detours made, the side of the blocking
+//! obstacle each took, and whether the run ended by the return to the best
+//! configuration (the attempts spent).
 
+use capp_core::escape::Side;
 use capp_core::Outcome;
 use capp_sim::check::{self, Geometry, ViolationKind};
+use capp_sim::escapes::{self, Kind};
 use capp_sim::plan::RunResult;
 use capp_sim::trajectory::Trajectory;
 use capp_sim::Problem;
@@ -34,6 +41,48 @@ pub const ROUNDING: f64 = 1.0e-4;
 fn class(value: f64) -> (bool, bool) {
     let collision = value.is_nan() || value <= -ROUNDING;
     (collision, !collision && value <= 0.0)
+}
+
+/// The dead-end escapes of one run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EscapeCounts {
+    /// Random walks made.
+    pub walks: u32,
+    /// Detours round a blocking obstacle made.
+    pub detours: u32,
+    /// Whether the run ended by the return to the best configuration (every
+    /// attempt spent).
+    pub returned: bool,
+    /// Each attempt in order: walk or detour, and the side of the blocking
+    /// obstacle taken (`None`: a walk with no obstacle blocking).
+    pub sides: Vec<(Kind, Option<Side>)>,
+    /// Step at which the first escape started.
+    pub first_step: Option<u32>,
+}
+
+impl EscapeCounts {
+    /// Walks and detours.
+    pub fn attempts(&self) -> u32 {
+        self.walks + self.detours
+    }
+
+    /// The escapes of `rows`.
+    pub fn of(rows: &[capp_sim::plan::Row]) -> EscapeCounts {
+        let mut c = EscapeCounts::default();
+        for s in escapes::of_rows(rows) {
+            match s.kind {
+                Kind::Walk => c.walks += 1,
+                Kind::Detour => c.detours += 1,
+                Kind::Return => {
+                    c.returned = true;
+                    continue;
+                }
+            }
+            c.sides.push((s.kind, s.side));
+            c.first_step.get_or_insert(s.step);
+        }
+        c
+    }
 }
 
 /// One planner run, measured.
@@ -81,6 +130,8 @@ pub struct RunMetrics {
     pub dense_checks: usize,
     /// Wall time of the planning loop, milliseconds.
     pub wall_ms: f64,
+    /// Dead-end escapes.
+    pub escape: EscapeCounts,
 }
 
 impl RunMetrics {
@@ -217,5 +268,6 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         other: count(ViolationKind::Shape) + count(ViolationKind::Kinematics),
         dense_checks,
         wall_ms: result.wall_time.as_secs_f64() * 1e3,
+        escape: EscapeCounts::of(&result.rows),
     }
 }

@@ -8,6 +8,7 @@
 use std::fmt::Write as _;
 
 use capp_core::Outcome;
+use capp_sim::escapes::Kind;
 
 use crate::families::Family;
 use crate::metrics::RunMetrics;
@@ -199,6 +200,83 @@ impl<'a> Tally<'a> {
     }
 }
 
+/// The motion times of the escaped-and-reached runs with an RRT path, and
+/// the RRT shortcut paths' times on the same cases.
+fn escaped_times(runs: &[(&CaseResult, &RunMetrics)]) -> (Vec<f64>, Vec<f64>) {
+    runs.iter()
+        .filter(|(_, m)| m.outcome == Outcome::Reached && m.escape.attempts() > 0)
+        .filter_map(|(c, m)| Some((m.motion_time, c.oracle.as_ref()?.path_time?)))
+        .unzip()
+}
+
+/// `12: -x 5, +x 4, none 3`: how often each side was taken by `kind`.
+fn side_counts(runs: &[(&CaseResult, &RunMetrics)], kind: Kind) -> String {
+    let mut counts: Vec<(String, usize)> = Vec::new();
+    for (_, m) in runs {
+        for (k, side) in &m.escape.sides {
+            if *k != kind {
+                continue;
+            }
+            let name = side.map_or("none".to_string(), capp_sim::escapes::side_name);
+            match counts.iter_mut().find(|c| c.0 == name) {
+                Some(c) => c.1 += 1,
+                None => counts.push((name, 1)),
+            }
+        }
+    }
+    let total: usize = counts.iter().map(|c| c.1).sum();
+    if total == 0 {
+        return "-".into();
+    }
+    counts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let list: Vec<String> = counts.iter().map(|(n, c)| format!("{n} {c}")).collect();
+    format!("{total}: {}", list.join(", "))
+}
+
+impl Tally<'_> {
+    fn escape_row(&self, lead: &str) -> String {
+        let escaped: Vec<_> = self
+            .runs
+            .iter()
+            .filter(|(_, m)| m.escape.attempts() > 0)
+            .copied()
+            .collect();
+        let reached: Vec<f64> = escaped
+            .iter()
+            .filter(|(_, m)| m.outcome == Outcome::Reached)
+            .map(|(_, m)| m.escape.attempts() as f64)
+            .collect();
+        let (motion, rrt) = escaped_times(&self.runs);
+        let ratios: Vec<f64> = motion
+            .iter()
+            .zip(&rrt)
+            .filter_map(|(&a, &b)| ratio(a, b))
+            .collect();
+        let of_medians = median(&motion)
+            .zip(median(&rrt))
+            .and_then(|(a, b)| ratio(a, b));
+        let returned = self.runs.iter().filter(|(_, m)| m.escape.returned).count();
+        format!(
+            "| {lead} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {} | {} | {} |",
+            self.runs.len(),
+            escaped.len(),
+            reached.len(),
+            opt(median(&reached), 0),
+            opt_int(reached.iter().copied().reduce(f64::max)),
+            opt(median(&motion), 1),
+            opt(median(&rrt), 1),
+            opt(of_medians, 2),
+            opt(median(&ratios), 2),
+            returned,
+            side_counts(&self.runs, Kind::Detour),
+            side_counts(&self.runs, Kind::Walk),
+        )
+    }
+}
+
+const ESCAPE_HEAD: &str = "| runs | escaped (any attempt) | escaped and reached | attempts of those, median / max | their motion time, median (s) | RRT shortcut path on the same cases, median (s) | motion / RRT: ratio of the medians | motion / RRT: median of the ratios | ended by the return (attempts spent) | detours: sides taken | walks: sides taken |";
+const ESCAPE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|";
+
 const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | contacts within rounding | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
 const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
@@ -218,6 +296,19 @@ pub fn markdown(
     variants: &[Variant],
     results: &[CaseResult],
     shipped: &[ShippedRun],
+) -> String {
+    markdown_with_figures(info, families, variants, results, shipped, &[])
+}
+
+/// [`markdown`] with `figures` (relative path, alt text, caption) embedded
+/// after the overall table.
+pub fn markdown_with_figures(
+    info: &RunInfo,
+    families: &[Family],
+    variants: &[Variant],
+    results: &[CaseResult],
+    shipped: &[ShippedRun],
+    figures: &[(String, String, String)],
 ) -> String {
     let mut s = String::new();
     let total: usize = info.counts.iter().map(|c| c.1).sum();
@@ -306,6 +397,79 @@ pub fn markdown(
     let _ = writeln!(s, "|---{TABLE_RULE}");
     for v in variants {
         let _ = writeln!(s, "{}", Tally::new(&all, v.name).row(v.name));
+    }
+
+    // Figures (a full run writes them).
+    if !figures.is_empty() {
+        s.push_str("\n## Figures\n");
+        for (path, alt, caption) in figures {
+            let _ = writeln!(s, "\n![{alt}]({path})\n\n{caption}");
+        }
+    }
+
+    // Dead-end escapes.
+    s.push_str(
+        "\n## Dead-end escapes\n\n\
+         When the law stops making progress short of the target, the planner escapes \
+         (`capp-core`'s `escape`): detours send the end effector round the blocking obstacle, \
+         random walks move the joints away from the dead end, up to the scenario's attempts per \
+         waypoint; then it walks back to the best configuration and ends `stalled` (*ended by the \
+         return*). Counted from the planner's step reports (the trajectory's `escape` column). \
+         *Escaped*: runs with at least one attempt; attempts and motion times are over the \
+         escaped runs that reached, the motion time and the RRT comparison over those whose case \
+         the oracle solved (its shortcut path at the rate limits). *Sides*: the side of the \
+         blocking obstacle each attempt took, an axis of the obstacle's own frame (*none*: a walk \
+         with no obstacle blocking), over all runs.\n\n",
+    );
+    let _ = writeln!(s, "| family | variant {ESCAPE_HEAD}");
+    let _ = writeln!(s, "|---|---{ESCAPE_RULE}");
+    for f in families {
+        let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
+        if of.is_empty() {
+            continue;
+        }
+        for v in variants {
+            let _ = writeln!(
+                s,
+                "{}",
+                Tally::new(&of, v.name).escape_row(&format!("{} | {}", f.name, v.name))
+            );
+        }
+    }
+    for v in variants {
+        let _ = writeln!(
+            s,
+            "{}",
+            Tally::new(&all, v.name).escape_row(&format!("all | {}", v.name))
+        );
+    }
+    if let Some(default) = variants.first() {
+        let (motion, rrt) = escaped_times(&Tally::new(&all, default.name).runs);
+        let ratios: Vec<f64> = motion
+            .iter()
+            .zip(&rrt)
+            .filter_map(|(&a, &b)| ratio(a, b))
+            .collect();
+        let verdict = |r: f64| if r <= 2.0 { "met" } else { "missed" };
+        let text = match (median(&motion).zip(median(&rrt)), median(&ratios)) {
+            (Some((m, r)), Some(each)) if r > 0.0 => format!(
+                "over the {} escaped cases reached with an RRT path, the median motion time is \
+                 {m:.1} s against {r:.1} s, {:.3}x ({}); the median of the per-case ratios is \
+                 {each:.3}x ({})",
+                motion.len(),
+                m / r,
+                verdict(m / r),
+                verdict(each)
+            ),
+            _ => "no escaped case was reached".into(),
+        };
+        let _ = writeln!(
+            s,
+            "\nThe target (issue 13): the median motion time of escaped cases within 2x the \
+             rate-limited time of RRT-Connect's shortcut path on the same cases. `{}`, all \
+             families: {text}.",
+            default.name
+        );
     }
 
     // The oracle.
@@ -531,12 +695,35 @@ pub fn markdown(
     s
 }
 
+/// `detour -x obstacle 2; walk +y obstacle 1; walk none`: each attempt's kind
+/// and side (1-based obstacle), in order.
+fn escape_sides(e: &crate::metrics::EscapeCounts) -> String {
+    let parts: Vec<String> = e
+        .sides
+        .iter()
+        .map(|(kind, side)| match side {
+            Some(s) => format!(
+                "{} {} obstacle {}",
+                kind.name(),
+                capp_sim::escapes::side_name(*s),
+                s.obstacle as u32 + 1
+            ),
+            None => format!("{} none", kind.name()),
+        })
+        .collect();
+    parts.join("; ")
+}
+
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_returned,escape_first_step,escape_sides,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
+    // A refused file: every measurement column empty (all but the case's 4,
+    // the oracle's 6 and the error).
+    let columns = s.trim_end().split(',').count();
+    let empty = ",".repeat(columns - 11);
     for r in results {
         let (solved, ms, it, nodes, raw, path) = match &r.oracle {
             Some(x) => (
@@ -559,7 +746,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:.3},{tail},",
                         capp_sim::output::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -577,15 +764,17 @@ pub fn csv(results: &[CaseResult]) -> String {
                         m.joint_limit,
                         m.rate_limit,
                         m.other,
+                        m.escape.attempts(),
+                        m.escape.walks,
+                        m.escape.detours,
+                        m.escape.returned,
+                        m.escape.first_step.map_or(String::new(), |x| x.to_string()),
+                        escape_sides(&m.escape),
                         m.wall_ms,
                     );
                 }
                 Err(e) => {
-                    let _ = writeln!(
-                        s,
-                        "{lead},,,,,,,,,,,,,,,,,,{tail},\"{}\"",
-                        e.replace('"', "'")
-                    );
+                    let _ = writeln!(s, "{lead},{empty}{tail},\"{}\"", e.replace('"', "'"));
                 }
             }
         }

@@ -309,3 +309,123 @@ fn report_tables_are_well_formed() {
     let csv = report::csv(&results);
     assert_eq!(csv.lines().count(), 1 + 3 * variants().len());
 }
+
+/// The planar arm of `capp-core`'s `planar_box_scenario` with a short post
+/// in its way, which the default planner passes by one detour.
+const DETOUR: &str = "name = \"detour\"\nstart = [0.0, 0.5, 0.5]\n\
+    [units]\nangle = \"radians\"\nlength = \"inches\"\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
+    [target]\nposition = [24.2, -13.2, 0.0]\n\
+    [[obstacles]]\nname = \"post\"\ncentre = [25.0, 0.0, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
+    [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n";
+
+#[test]
+fn escapes_are_counted_with_their_sides_and_the_return() {
+    use capp_sim::escapes::Kind;
+    let m = runner::measure_variant(DETOUR, "detour", variants()[0])
+        .metrics
+        .unwrap();
+    assert_eq!(m.outcome, Outcome::Reached);
+    assert_eq!((m.escape.detours, m.escape.walks), (1, 0));
+    assert!(!m.escape.returned);
+    assert_eq!(m.escape.first_step, Some(158));
+    let (kind, side) = m.escape.sides[0];
+    assert_eq!(kind, Kind::Detour);
+    let side = side.unwrap();
+    assert_eq!((side.obstacle, side.axis, side.positive), (0, 0, false));
+    // Escapes off: the same case stalls, nothing counted.
+    let off = with_settings(DETOUR, "escape_attempts = 0");
+    let m = runner::measure_variant(&off, "detour", variants()[0])
+        .metrics
+        .unwrap();
+    assert_eq!(m.outcome, Outcome::Stalled);
+    assert_eq!(m.escape, Default::default());
+    // The dead end of the shipped scenarios spends every attempt, then returns.
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../host-sim/scenarios/pips_dead_end.toml"
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    let m = runner::measure_variant(&text, "pips_dead_end", variants()[0])
+        .metrics
+        .unwrap();
+    assert_eq!(m.outcome, Outcome::Stalled);
+    assert_eq!(m.escape.attempts(), 40);
+    assert_eq!(m.escape.sides.len(), 40);
+    assert!(m.escape.returned);
+}
+
+#[test]
+fn the_csv_has_every_column_on_every_row_and_the_figures_draw() {
+    use capp_suite::{figures, report};
+    let f = family("planar_posts");
+    let budget = Budget {
+        iterations: 300,
+        nodes: 2000,
+        shortcuts: 10,
+    };
+    let results: Vec<_> = families::cases(&f, SEED, 3)
+        .unwrap()
+        .iter()
+        .map(|c| runner::run_case(c, &variants(), SEED, Some(budget)))
+        .collect();
+    let csv = report::csv(&results);
+    // Fields of a line, quotes respected (tags and sides are quoted).
+    let fields = |line: &str| {
+        let mut quoted = false;
+        1 + line
+            .chars()
+            .filter(|&c| {
+                quoted ^= c == '"';
+                c == ',' && !quoted
+            })
+            .count()
+    };
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    for column in [
+        "escape_attempts",
+        "escape_walks",
+        "escape_detours",
+        "escape_returned",
+        "escape_sides",
+    ] {
+        assert!(header.split(',').any(|h| h == column), "{column}");
+    }
+    for line in lines {
+        assert_eq!(fields(line), fields(header), "{line}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let written = figures::write(dir.path(), &[f], &variants(), &results).unwrap();
+    assert_eq!(written.len(), 2);
+    for stem in [figures::REACH, figures::MOTION] {
+        let svg = std::fs::read_to_string(dir.path().join(format!("{stem}.svg"))).unwrap();
+        assert!(svg.contains("<text"), "{stem}");
+        assert!(dir.path().join(format!("{stem}.png")).is_file(), "{stem}");
+    }
+    let reach = std::fs::read_to_string(dir.path().join("planning_reach.svg")).unwrap();
+    for v in variants() {
+        assert!(reach.contains(&format!(">{}</text>", v.name)), "{}", v.name);
+    }
+    let text = report::markdown_with_figures(
+        &report::RunInfo {
+            seed: SEED,
+            counts: vec![(f.name.to_string(), 3)],
+            threads: 1,
+            machine: "test".into(),
+            wall_s: 0.0,
+            budget,
+            command: "test".into(),
+        },
+        &[f],
+        &variants(),
+        &results,
+        &[],
+        &written,
+    );
+    assert!(text.contains("](docs/img/planning_reach.png)"));
+    assert!(text.contains("](docs/img/planning_motion.png)"));
+    assert!(text.contains("## Dead-end escapes"));
+}

@@ -31,6 +31,7 @@ pub const PALETTE: [Rgb; 7] = [
 const GRID: Rgb = [232, 232, 232];
 const INK: Rgb = [30, 30, 30];
 const MUTED: Rgb = [90, 90, 90];
+const LIGHT: Rgb = [160, 160, 160];
 
 /// One axis: the data range drawn and whether it is logarithmic.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -190,6 +191,8 @@ pub enum Marker {
     Dot,
     /// A filled square.
     Bar,
+    /// A filled diamond with a dark outline (a place marked on a path).
+    Diamond,
 }
 
 /// A plotting box in pixels with its two scales and tick labels.
@@ -320,6 +323,7 @@ pub fn legend_marker(canvas: &mut Canvas, at: P2, color: Rgb, marker: Marker) {
             radius: 4.0,
             color,
         }),
+        Marker::Diamond => diamond(canvas, (x + 9.0, y), color),
         Marker::Bar => canvas.push(Shape::Polygon {
             points: vec![
                 (x + 3.0, y - 6.0),
@@ -332,6 +336,22 @@ pub fn legend_marker(canvas: &mut Canvas, at: P2, color: Rgb, marker: Marker) {
             clip: None,
         }),
     }
+}
+
+/// A diamond 10 px across centred at `at`: `color` inside a dark outline.
+pub fn diamond(canvas: &mut Canvas, at: P2, color: Rgb) {
+    let (x, y) = at;
+    let r = 5.0;
+    let points = vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)];
+    let mut outline = points.clone();
+    outline.push((x, y - r));
+    canvas.push(Shape::Polygon {
+        points,
+        fill: color,
+        opacity: 1.0,
+        clip: None,
+    });
+    canvas.push(Shape::line(outline, INK, 1.0));
 }
 
 /// A named list of values, one per category.
@@ -380,6 +400,9 @@ pub struct ScatterChart {
     pub series: Vec<PointSeries>,
     /// Legend entry for a dashed `y = x` line, if one is wanted.
     pub diagonal: Option<String>,
+    /// Further dashed lines `y = k x` (e.g. a target of twice the bound),
+    /// lighter, with their legend entries; drawn only with `diagonal`.
+    pub slopes: Vec<(f64, String)>,
     /// Logarithmic axes (points with a coordinate <= 0 are left out).
     pub log: bool,
 }
@@ -453,7 +476,21 @@ pub fn bar_chart(chart: &BarChart) -> Canvas {
         .map(|(s, series)| (series.name.clone(), PALETTE[s % PALETTE.len()], Marker::Bar))
         .collect();
     if items.len() > 1 {
-        axes.legend(&mut canvas, &items);
+        // A row under the category names: bars reach the top, where a
+        // legend box would cover them.
+        let size = 11.0;
+        let width: f64 = items
+            .iter()
+            .map(|(n, ..)| 24.0 + font::width(n, size) + 18.0)
+            .sum::<f64>()
+            - 18.0;
+        let mut x = ((rect.0 + rect.2 - width) / 2.0).max(rect.0);
+        let y = rect.3 + 42.0;
+        for (name, color, marker) in &items {
+            legend_marker(&mut canvas, (x, y), *color, *marker);
+            canvas.push(Shape::text((x + 24.0, y + 4.0), size, name.clone()).colored(INK));
+            x += 24.0 + font::width(name, size) + 18.0;
+        }
     }
     canvas
 }
@@ -513,6 +550,21 @@ pub fn scatter_chart(chart: &ScatterChart) -> Canvas {
             .collect();
         canvas.push(Shape::line(line, MUTED, 1.5).dashed().clipped(rect));
         items.push((name.clone(), MUTED, Marker::Dashed));
+        for (k, name) in &chart.slopes {
+            let line: Vec<P2> = (0..=64)
+                .filter_map(|i| {
+                    let t = i as f64 / 64.0;
+                    let v = if chart.log {
+                        axes.x.lo * (axes.x.hi / axes.x.lo).powf(t)
+                    } else {
+                        axes.x.lo + (axes.x.hi - axes.x.lo) * t
+                    };
+                    axes.map(v, k * v)
+                })
+                .collect();
+            canvas.push(Shape::line(line, LIGHT, 1.2).dashed().clipped(rect));
+            items.push((name.clone(), LIGHT, Marker::Dashed));
+        }
     }
     for (s, series) in chart.series.iter().enumerate() {
         let color = PALETTE[s % PALETTE.len()];
@@ -586,9 +638,12 @@ mod tests {
                 points: vec![(1.0, 0.5), (2.0, 2.5), (f64::NAN, 1.0)],
             }],
             diagonal: Some("y = bound".into()),
+            slopes: vec![(2.0, "y = 2 bound".into())],
             log: false,
         });
         assert_eq!(scatter.svg().matches("<circle").count(), 2 + 1);
-        assert!(scatter.svg().contains("stroke-dasharray"));
+        // The diagonal, the 2x line and their two legend swatches.
+        assert_eq!(scatter.svg().matches("stroke-dasharray").count(), 4);
+        assert!(scatter.svg().contains(">y = 2 bound</text>"));
     }
 }

@@ -1,12 +1,20 @@
 //! `V`, the errors and the clearance against step, on log scales, with
-//! titles, units, ticks and legends.
+//! titles, units, ticks and legends; the steps spent escaping dead ends
+//! shaded (a band per walk, detour or return, in its colour of `arm.png`).
 
 use super::canvas::{Canvas, Rgb, Shape, P2};
 use super::chart::{Axes, Marker, Scale, PALETTE};
+use super::views::{escape_color, escape_legend, lerp};
+use crate::escapes::Stretch;
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
 type Series = (String, Rgb, Vec<Option<f64>>);
+
+/// The pale fill of an escape band (opaque, so it lies under the grid).
+pub fn band_color(stretch: &Stretch) -> Rgb {
+    lerp(escape_color(stretch.kind), [255, 255, 255], 0.72)
+}
 
 /// The three stacked panels.
 pub fn plots(problem: &Problem, t: &Trajectory) -> Canvas {
@@ -29,6 +37,7 @@ pub fn plots(problem: &Problem, t: &Trajectory) -> Canvas {
         t.rows.iter().map(f).collect()
     };
     let engage = problem.settings.avoidance.engage_clearance as f64;
+    let escapes = t.escapes();
     let panels: [(String, String, Vec<Series>); 3] = [
         (
             "Lyapunov function V (eq. 12, orientation weighted by λ²)".into(),
@@ -72,6 +81,23 @@ pub fn plots(problem: &Problem, t: &Trajectory) -> Canvas {
             Scale::linear(0.0, smax),
             Scale::log_of(values.iter().copied()),
         );
+        // A band per escape: from the step it started to the step it ended.
+        for e in &escapes {
+            let from = steps[e.first];
+            let to = steps[e.end(steps.len())].max(from + 0.5);
+            let (Some(a), Some(mut b)) = (axes.map(from, axes.y.lo), axes.map(to, axes.y.hi))
+            else {
+                continue;
+            };
+            // At least 2 px, so a short one is still seen.
+            b.0 = b.0.max(a.0 + 2.0);
+            canvas.push(Shape::Polygon {
+                points: vec![(a.0, a.1), (b.0, a.1), (b.0, b.1), (a.0, b.1)],
+                fill: band_color(e),
+                opacity: 1.0,
+                clip: Some(rect),
+            });
+        }
         axes.draw(&mut canvas, title, "step", y_label);
         let mut items: Vec<(String, Rgb, Marker)> = Vec::new();
         for (name, color, values) in series {
@@ -100,6 +126,13 @@ pub fn plots(problem: &Problem, t: &Trajectory) -> Canvas {
                     [120, 120, 120],
                     Marker::Dashed,
                 ));
+            }
+        }
+        if i == 0 {
+            // The escapes' kinds, once, in their pale band colours.
+            for (name, color, _) in escape_legend(&escapes) {
+                let pale = lerp(color, [255, 255, 255], 0.72);
+                items.push((format!("{name} (shaded)"), pale, Marker::Bar));
             }
         }
         axes.legend(&mut canvas, &items);

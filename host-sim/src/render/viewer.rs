@@ -8,16 +8,21 @@
 //!
 //! `RUN` holds, for each of up to [`FRAMES`] rows (picked by
 //! [`super::views::frames`]): step, plan time, `V`, errors, clearance, the
-//! frame origins `o_0..o_n` and the end effector's axes; the end-effector
-//! path; the waypoints (with their orientation when they have one); and each
-//! obstacle's surface as a `(lat + 1) x lon` grid of world points.
+//! frame origins `o_0..o_n` and the end effector's axes, and the escape
+//! under way (`escape`: a phrase, or `null` while the law drives); the
+//! end-effector path; the escape stretches (`escapes`: kind, colour, the step
+//! it started, a phrase, and its stretch of the path); the waypoints (with
+//! their orientation when they have one); and each obstacle's surface as a
+//! `(lat + 1) x lon` grid of world points. The row where each escape started
+//! is always among the frames.
 
 use std::fmt::Write as _;
 
 use super::canvas::escape;
 use super::chart::nice_step;
-use super::views::{bounds, frames, origins, surface};
+use super::views::{bounds, escape_color, frames, origins, surface};
 use crate::check::forward;
+use crate::escapes::{classify, side_name, Kind};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -72,11 +77,46 @@ fn string(s: &str) -> String {
     out
 }
 
+/// An obstacle in words: `"box"`, or `obstacle 3` when it has no name.
+fn obstacle_name(problem: &Problem, o: usize) -> String {
+    match problem.obstacle_names.get(o).filter(|n| !n.is_empty()) {
+        Some(n) => format!("\"{n}\""),
+        None => format!("obstacle {}", o + 1),
+    }
+}
+
+/// The escape under way, in words (`None` while the law drives).
+pub fn escape_phrase(problem: &Problem, state: capp_core::escape::EscapeState) -> Option<String> {
+    let (kind, attempt, side) = classify(state)?;
+    let on = |s: capp_core::escape::Side| {
+        (
+            obstacle_name(problem, s.obstacle as usize),
+            side_name(s).replace('-', "−"),
+        )
+    };
+    Some(match (kind, side.map(on)) {
+        (Kind::Detour, Some((o, s))) => format!("detour {attempt} round {o}, its {s} side"),
+        (Kind::Walk, Some((o, s))) => format!("walk {attempt} to the {s} side of {o}"),
+        (Kind::Walk | Kind::Detour, None) => format!("walk {attempt}, no obstacle blocking"),
+        (Kind::Return, _) => "return to the best configuration".into(),
+    })
+}
+
+fn hex(c: [u8; 3]) -> String {
+    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
 /// The `RUN` object.
 pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
     let origins = origins(problem, t);
     let (centre, side) = bounds(problem, &origins);
-    let picks = frames(&origins, FRAMES);
+    let escapes = t.escapes();
+    // Where each escape started is always a frame.
+    let starts: Vec<usize> = escapes.iter().map(|e| e.first).take(FRAMES / 4).collect();
+    let mut picks = frames(&origins, FRAMES - starts.len());
+    picks.extend(&starts);
+    picks.sort_unstable();
+    picks.dedup();
     let mut time = Vec::with_capacity(t.rows.len());
     let mut clock = 0.0;
     for r in &t.rows {
@@ -134,6 +174,38 @@ pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
         rows(&|k| t.rows[k].orientation_error)
     );
     let _ = writeln!(s, "\"clearance\": {},", rows(&|k| t.rows[k].clearance));
+    let phrases: Vec<String> = picks
+        .iter()
+        .map(|&k| {
+            t.rows[k]
+                .escape
+                .and_then(|e| escape_phrase(problem, e))
+                .map_or("null".into(), |p| string(&p))
+        })
+        .collect();
+    let _ = writeln!(s, "\"escape\": [{}],", phrases.join(","));
+    s.push_str("\"escapes\": [");
+    for (i, e) in escapes.iter().enumerate() {
+        let path = origins[e.first..=e.end(origins.len())]
+            .iter()
+            .filter_map(|o| o.last())
+            .flat_map(|p| p.map(Some));
+        let phrase = t.rows[e.first]
+            .escape
+            .and_then(|x| escape_phrase(problem, x))
+            .unwrap_or_default();
+        let _ = write!(
+            s,
+            "{}{{\"kind\": {}, \"colour\": {}, \"step\": {}, \"text\": {}, \"path\": {}}}",
+            if i > 0 { ",\n" } else { "\n" },
+            string(e.kind.name()),
+            string(&hex(escape_color(e.kind))),
+            e.step,
+            string(&phrase),
+            list(path),
+        );
+    }
+    s.push_str("],\n");
     let flat = picks
         .iter()
         .flat_map(|&k| origins[k].iter().flatten().map(|v| Some(*v)));
@@ -213,6 +285,7 @@ table {{ border-collapse: collapse; width: 100%; margin-bottom: 8px; }}
 td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: tabular-nums; }}
 .swatch {{ display: inline-block; width: 12px; height: 12px; margin-right: 6px; vertical-align: -1px; border-radius: 2px; }}
 #legend div {{ margin: 2px 0; }}
+#escape {{ margin: -4px 0 8px; min-height: 16px; }}
 .help {{ color: #667; font-size: 11px; margin-top: 8px; }}
 </style></head>
 <body>
@@ -221,6 +294,7 @@ td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: ta
 <h1>{name}</h1>
 <div id="controls"><button id="play">pause</button><input id="seek" type="range" min="0" value="0"></div>
 <table id="now"></table>
+<div id="escape"><span class="swatch" id="escape-swatch"></span><span id="escape-text"></span></div>
 <div id="legend"></div>
 <div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view &middot; viewer.html#frame=N opens at frame N</div>
 </div>

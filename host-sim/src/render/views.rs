@@ -6,9 +6,10 @@
 //! with exponents >= 1 are convex, so the hull is exact up to sampling.
 
 use super::canvas::{Anchor, Canvas, Clip, Rgb, Shape, P2};
-use super::chart::{legend_marker, nice_step, tick_label, Marker};
+use super::chart::{diamond, legend_marker, nice_step, tick_label, Marker};
 use super::font;
 use crate::check::forward;
+use crate::escapes::{Kind, Stretch};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -21,6 +22,41 @@ pub const TARGET: Rgb = [20, 150, 60];
 /// Obstacle fill.
 pub const OBSTACLE: Rgb = [120, 130, 140];
 const PATH: Rgb = [30, 30, 30];
+/// The end-effector path while detouring round an obstacle.
+pub const DETOUR: Rgb = [0, 150, 160];
+/// ... while walking away from a dead end.
+pub const WALK: Rgb = [235, 135, 0];
+/// ... while returning to the best configuration (dashed).
+pub const RETURN: Rgb = [150, 90, 40];
+
+/// The colour of an escape stretch in every picture.
+pub fn escape_color(kind: Kind) -> Rgb {
+    match kind {
+        Kind::Detour => DETOUR,
+        Kind::Walk => WALK,
+        Kind::Return => RETURN,
+    }
+}
+
+/// The legend entries for the escape kinds in `stretches`, in a fixed order.
+pub fn escape_legend(stretches: &[Stretch]) -> Vec<(String, Rgb, Marker)> {
+    let mut items = Vec::new();
+    for (kind, name) in [
+        (Kind::Detour, "detour round an obstacle"),
+        (Kind::Walk, "walk from a dead end"),
+        (Kind::Return, "return to the best configuration"),
+    ] {
+        if stretches.iter().any(|s| s.kind == kind) {
+            let marker = if kind == Kind::Return {
+                Marker::Dashed
+            } else {
+                Marker::Line
+            };
+            items.push((name.to_string(), escape_color(kind), marker));
+        }
+    }
+    items
+}
 const INK: Rgb = [30, 30, 30];
 const MUTED: Rgb = [90, 90, 90];
 
@@ -297,8 +333,10 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
         ),
         scale,
     });
+    let escapes = t.escapes();
     let width = (LEFT + 3.0 * panel + 2.0 * GAP + 24.0) as u32;
-    let height = (TOP + panel + BOTTOM) as u32;
+    let legend_rows = if escapes.is_empty() { 0.0 } else { 20.0 };
+    let height = (TOP + panel + BOTTOM + legend_rows) as u32;
     let mut canvas = Canvas::new(width, height);
     let unit = &problem.length_unit;
     let headline = if snapshots > 0 {
@@ -426,6 +464,28 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
                 .clipped(p.clip()),
             );
         }
+        // The escape stretches over the path and the arm, thicker, and where each started.
+        for e in &escapes {
+            let stretch: Vec<P2> = origins[e.first..=e.end(origins.len())]
+                .iter()
+                .filter_map(|o| o.last().map(|q| p.map(q)))
+                .collect();
+            let line = Shape::line(stretch, escape_color(e.kind), 2.0).clipped(p.clip());
+            canvas.push(if e.kind == Kind::Return {
+                line.dashed()
+            } else {
+                line
+            });
+        }
+        for e in escapes.iter().filter(|e| e.kind != Kind::Return) {
+            if let Some(q) = origins[e.first].last() {
+                let at = p.map(q);
+                let (x0, y0, x1, y1) = p.clip();
+                if (x0..=x1).contains(&at.0) && (y0..=y1).contains(&at.1) {
+                    diamond(&mut canvas, at, escape_color(e.kind));
+                }
+            }
+        }
         for w in &problem.waypoints {
             canvas.push(Shape::Disc {
                 centre: p.map(&w.position.map(f64::from)),
@@ -456,7 +516,7 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
             1.0,
         ));
     }
-    legend(&mut canvas, (LEFT, TOP + panel + 60.0), snapshots);
+    legend(&mut canvas, (LEFT, TOP + panel + 60.0), snapshots, &escapes);
     ArmScene {
         canvas,
         panels,
@@ -522,7 +582,7 @@ fn label_spot(hull: &[P2], panel: Clip, name: &str, avoid: &[P2], placed: &[P2])
 }
 
 /// The legend row under the panels.
-fn legend(canvas: &mut Canvas, at: P2, snapshots: usize) {
+fn legend(canvas: &mut Canvas, at: P2, snapshots: usize, escapes: &[Stretch]) {
     let (mut x, y) = at;
     let size = 11.5;
     let arm = if snapshots > 0 {
@@ -546,6 +606,26 @@ fn legend(canvas: &mut Canvas, at: P2, snapshots: usize) {
         legend_marker(canvas, (x, y), color, marker);
         canvas.push(Shape::text((x + 24.0, y + 4.0), size, name).colored(INK));
         x += 24.0 + font::width(name, size) + 28.0;
+    }
+    // A second row for the escapes, when there were any.
+    let mut items = escape_legend(escapes);
+    if items.is_empty() {
+        return;
+    }
+    let starts = escapes.iter().filter(|e| e.kind != Kind::Return).count();
+    if starts > 0 {
+        let colour = escapes.first().map_or(WALK, |e| escape_color(e.kind));
+        items.push((
+            format!("escape started ({starts})"),
+            colour,
+            Marker::Diamond,
+        ));
+    }
+    let (mut x, y) = (at.0, at.1 + 20.0);
+    for (name, color, marker) in items {
+        legend_marker(canvas, (x, y), color, marker);
+        canvas.push(Shape::text((x + 24.0, y + 4.0), size, name.clone()).colored(INK));
+        x += 24.0 + font::width(&name, size) + 28.0;
     }
 }
 

@@ -1,0 +1,195 @@
+//! Where a run escaped dead ends shows in its summary and its pictures: a
+//! three-link planar arm whose straight path is blocked, run through the
+//! command line as a user runs it (`capp run --render`, so the pictures are
+//! drawn from `trajectory.csv` read back).
+
+use std::path::{Path, PathBuf};
+
+use capp_sim::escapes::{self, Kind};
+use capp_sim::output::Summary;
+use capp_sim::render::plots::band_color;
+use capp_sim::render::views::{DETOUR, RETURN, WALK};
+use capp_sim::{plan, Problem};
+
+/// The planar arm of `capp-core`'s `planar_box_scenario` (links of 10 in)
+/// with a box of half-height `half_height` in its way: a tall one (too big
+/// to go round) is escaped by a walk, a short post by a detour.
+fn scenario(name: &str, half_height: f64) -> String {
+    let joint = "[[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n";
+    format!(
+        "name = \"{name}\"\nstart = [0.0, 0.5, 0.5]\n\
+         [units]\nangle = \"radians\"\nlength = \"inches\"\n\
+         {joint}{joint}{joint}\
+         [target]\nposition = [24.2, -13.2, 0.0]\n\
+         [[obstacles]]\nname = \"post\"\ncentre = [25.0, 0.0, 0.0]\nsemi_axes = [1.5, 1.5, {half_height}]\nexponent = 8.0\n\
+         [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n"
+    )
+}
+
+/// `capp run FILE --out DIR --render -q`; returns the output folder.
+fn run(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join(name);
+    let code = capp_sim::cli::main([
+        "capp".as_ref(),
+        "run".as_ref(),
+        file.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--render".as_ref(),
+        "-q".as_ref(),
+    ]);
+    assert_eq!(code, std::process::ExitCode::SUCCESS, "{name}");
+    out
+}
+
+fn hex(c: [u8; 3]) -> String {
+    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
+/// Polylines drawn in `colour` (path stretches and legend swatches).
+fn strokes(svg: &str, colour: [u8; 3]) -> usize {
+    svg.matches(&format!("stroke=\"{}\"", hex(colour))).count()
+}
+
+/// Polygons filled with `colour`.
+fn fills(svg: &str, colour: [u8; 3]) -> usize {
+    let fill = format!("fill=\"{}\"", hex(colour));
+    svg.split("<polygon ")
+        .skip(1)
+        .filter(|p| p.split("/>").next().is_some_and(|p| p.contains(&fill)))
+        .count()
+}
+
+#[test]
+fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, half_height, kind, colour, phrase) in [
+        (
+            "detour",
+            5.0,
+            Kind::Detour,
+            DETOUR,
+            "detour at step 158 round \"post\" on its -x side",
+        ),
+        (
+            "walk",
+            20.0,
+            Kind::Walk,
+            WALK,
+            "walk at step 158 to the +y side of \"post\"",
+        ),
+    ] {
+        let out = run(dir.path(), name, &scenario(name, half_height));
+        let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
+        eprintln!("{summary}");
+        assert!(summary.contains("outcome:           reached"), "{summary}");
+        assert!(
+            summary.contains("escapes:           1 attempt ("),
+            "{summary}"
+        );
+        assert!(summary.contains(phrase), "{summary}");
+        assert!(!summary.contains("stalled after"), "{summary}");
+
+        // The stretches, from the CSV the pictures are drawn from.
+        let t = capp_sim::trajectory::read(&out.join("trajectory.csv")).unwrap();
+        let stretches = t.escapes();
+        assert_eq!(stretches.len(), 1, "{name}: {stretches:?}");
+        assert_eq!(stretches[0].kind, kind);
+        assert_eq!(stretches[0].step, 158);
+
+        // arm.svg: the stretch in its colour in each of the three views, a
+        // legend line, a diamond where it started (and one in the legend).
+        let other = if kind == Kind::Detour { WALK } else { DETOUR };
+        let arm = std::fs::read_to_string(out.join("arm.svg")).unwrap();
+        assert_eq!(strokes(&arm, colour), 3 + 1, "{name}: arm.svg");
+        assert_eq!(strokes(&arm, other), 0, "{name}: arm.svg");
+        assert_eq!(strokes(&arm, RETURN), 0, "{name}: arm.svg");
+        assert_eq!(fills(&arm, colour), 3 + 1, "{name}: arm.svg diamonds");
+        assert!(arm.contains(">escape started (1)</text>"), "{name}");
+        let legend = if kind == Kind::Detour {
+            ">detour round an obstacle</text>"
+        } else {
+            ">walk from a dead end</text>"
+        };
+        assert!(arm.contains(legend), "{name}");
+
+        // plots.svg: a band per panel and the legend's swatch.
+        let plots = std::fs::read_to_string(out.join("plots.svg")).unwrap();
+        assert_eq!(fills(&plots, band_color(&stretches[0])), 3 + 1, "{name}");
+        assert!(plots.contains(" (shaded)</text>"), "{name}");
+
+        // viewer.html: the states per frame and the stretch with its colour.
+        let viewer = std::fs::read_to_string(out.join("viewer.html")).unwrap();
+        let run = viewer.split("const RUN = ").nth(1).unwrap();
+        let run = run.split("</script>").next().unwrap();
+        let states = run.split("\"escape\": [").nth(1).unwrap();
+        let states = states.split("],").next().unwrap();
+        let escaping = states.split(',').filter(|s| *s != "null").count();
+        assert!(escaping >= 5, "{name}: {escaping} frames escaping");
+        let expected = if kind == Kind::Detour {
+            "\"detour 1 round \\\"post\\\", its −x side\""
+        } else {
+            "\"walk 1 to the +y side of \\\"post\\\"\""
+        };
+        assert!(states.contains(expected), "{name}: {states}");
+        assert!(
+            run.contains(&format!(
+                "{{\"kind\": \"{}\", \"colour\": \"{}\", \"step\": 158,",
+                kind.name(),
+                hex(colour)
+            )),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn a_run_that_spends_its_attempts_says_so_in_a_few_lines() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_dead_end.toml");
+    let problem = Problem::load(&path).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let attempts = problem.settings.escape.attempts as usize;
+    let stretches = escapes::of_rows(&result.rows);
+    assert_eq!(
+        stretches.iter().filter(|s| s.kind != Kind::Return).count(),
+        attempts
+    );
+    assert_eq!(stretches.last().map(|s| s.kind), Some(Kind::Return));
+    let text = Summary::new(&problem, &result).to_string();
+    let lines: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("escapes:"))
+        .take_while(|l| !l.starts_with("setpoints:"))
+        .collect();
+    assert!((2..=5).contains(&lines.len()), "{text}");
+    assert!(
+        lines[0].starts_with(&format!("escapes:           {attempts} attempts (")),
+        "{text}"
+    );
+    assert!(lines[0].contains(", ..., "), "{text}");
+    assert!(lines.iter().any(|l| l.contains("\"wall\" ")), "{text}");
+    assert!(
+        lines.iter().any(|l| l
+            .trim_start()
+            .starts_with(&format!("stalled after {attempts} escape attempts; "))),
+        "{text}"
+    );
+}
+
+#[test]
+fn rows_from_a_board_say_nothing_about_escapes() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml");
+    let problem = Problem::load(&path).unwrap();
+    let scenario = problem.validate().unwrap();
+    let mut result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let here = Summary::new(&problem, &result).to_string();
+    assert!(here.contains("escapes:           none\n"), "{here}");
+    for r in &mut result.rows {
+        r.escape = None;
+    }
+    let board = Summary::new(&problem, &result).to_string();
+    assert!(!board.contains("escape"), "{board}");
+}
