@@ -36,8 +36,11 @@
 //!
 //! Either way the report names the side of the blocking obstacle taken.
 //!
-//! When the attempts are spent the planner walks back to the best
-//! configuration it found (the lowest `V`) and ends `Stalled` there. Every
+//! When the attempts are spent the planner walks back, straight in joint
+//! space, toward the best configuration it found (the lowest `V`) and ends
+//! `Stalled` when it gets there, or where the return is blocked (an arm
+//! pressed against an obstacle may not get all the way back: the report
+//! and `capp run`'s summary say which). Every
 //! escape step costs a bounded amount: a walk step is a joint-space step;
 //! choosing a walk adds [`CANDIDATES`] forward kinematics passes.
 
@@ -429,7 +432,8 @@ impl<const N: usize> Escape<N> {
             self.idle = self.idle.saturating_add(1);
         }
         let (limit, patience) = match self.state {
-            EscapeState::Returning => (settings.walk_steps.saturating_mul(2), WALK_PATIENCE),
+            // Back to the best configuration: as patient as a detour.
+            EscapeState::Returning => (settings.walk_steps.saturating_mul(2), settings.window),
             // The law slows near the point; give it the stall window.
             EscapeState::Detouring { .. } => (settings.walk_steps, settings.window),
             _ => (settings.walk_steps, WALK_PATIENCE),
