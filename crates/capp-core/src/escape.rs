@@ -91,8 +91,8 @@ impl Default for EscapeSettings {
     fn default() -> Self {
         EscapeSettings {
             attempts: 64,
-            window: 40,
-            walk_steps: 200,
+            window: 20,
+            walk_steps: 120,
             reach: 0.25,
             seed: 0x2545_F491,
         }
