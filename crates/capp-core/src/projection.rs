@@ -138,7 +138,15 @@ pub fn project<const N: usize>(
     }
     let n = robot.len();
     let joints = &robot.joints()[..n];
-    let (q, mu, rate, locked) = (&q[..n], &mu[..n], &mut rate[..n], &mut locked[..n]);
+    // Inputs shorter than the robot (no caller passes them): left alone.
+    let (Some(q), Some(mu), Some(rate), Some(locked)) = (
+        q.get(..n),
+        mu.get(..n),
+        rate.get_mut(..n),
+        locked.get_mut(..n),
+    ) else {
+        return false;
+    };
     // A rate into a limit the joint already sits at will be clamped away by the
     // integrator: drop it now, so the projection sees the motion that happens.
     // (Zipped iterators rather than indices: no bounds checks, no panic path.)

@@ -265,9 +265,13 @@ pub fn weighted_rate<const N: usize>(
     gain: &mut [f32],
 ) -> Drive {
     let n = robot.len();
-    let drive = &mut drive[..n];
+    // Buffers shorter than the robot (no caller passes them): no rate.
+    let (Some(drive), Some(gain), true) = (drive.get_mut(..n), gain.get_mut(..n), rate.len() >= n)
+    else {
+        rate.fill(0.0);
+        return Drive::Idle;
+    };
     let rate = &mut rate[..n];
-    let gain = &mut gain[..n];
     gain.fill(0.0);
     let lambda_sq = settings.orientation_scale * settings.orientation_scale;
     let weight = |i: usize| if i == 3 { 1.0 } else { lambda_sq };
