@@ -371,45 +371,53 @@ pub fn escape_obstacles() -> [SuperEllipsoid; 10] {
 /// `host-sim/scenarios/pips_escape.toml`: a dead end (a bracket on the
 /// end-effector path) the planner escapes by a detour, then reaches.
 pub fn pips_escape() -> Result<Scene<PIPS_JOINTS>, SceneError> {
-    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
-    let settings = Settings {
-        position_tolerance: 0.1,
-        ..Settings::for_robot(&robot)
-    };
-    let mission = Mission::new(
+    pips_scene(
+        |defaults| Settings {
+            position_tolerance: 0.1,
+            ..defaults
+        },
         &[Waypoint::pose(ESCAPE_TARGET.0, ESCAPE_TARGET.1)],
-        settings,
+        &escape_obstacles(),
+        ESCAPE_START,
     )
-    .map_err(ScenarioError::Mission)?;
-    let scenario = Scenario::new(robot, &escape_obstacles(), &mission)?;
-    Ok(Scene {
-        scenario,
-        start: ESCAPE_START,
-        joints: PIPS_JOINTS,
-    })
 }
 
 /// `host-sim/scenarios/pips_dead_end.toml`: from home toward a target walled
 /// in by a 600 in wall; no path exists, the escape spends its budget and the
 /// run ends stalled.
 pub fn pips_dead_end() -> Result<Scene<PIPS_JOINTS>, SceneError> {
-    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
-    let settings = Settings {
-        stall_window: 300,
-        ..Settings::for_robot(&robot)
-    };
-    let mission = Mission::new(&[Waypoint::at([100.0, 40.0, 10.0])], settings)
-        .map_err(ScenarioError::Mission)?;
     let wall = SuperEllipsoid {
         centre: [14.142, -14.142, 0.0],
         semi_axes: [3.0, 300.0, 300.0],
         exponents: [8.0; 3],
         euler_123: [0.0, 0.0, -core::f32::consts::FRAC_PI_4],
     };
-    let scenario = Scenario::new(robot, &[wall], &mission)?;
+    pips_scene(
+        |defaults| Settings {
+            stall_window: 300,
+            ..defaults
+        },
+        &[Waypoint::at([100.0, 40.0, 10.0])],
+        &[wall],
+        pips::home(),
+    )
+}
+
+/// A PIPS scene of a shipped scenario: `settings` amends the defaults for
+/// PIPS (`Settings::for_robot`) as the file's `[settings]` table does.
+fn pips_scene(
+    settings: impl FnOnce(Settings) -> Settings,
+    waypoints: &[Waypoint],
+    obstacles: &[SuperEllipsoid],
+    start: [f32; PIPS_JOINTS],
+) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
+    let settings = settings(Settings::for_robot(&robot));
+    let mission = Mission::new(waypoints, settings).map_err(ScenarioError::Mission)?;
+    let scenario = Scenario::new(robot, obstacles, &mission)?;
     Ok(Scene {
         scenario,
-        start: pips::home(),
+        start,
         joints: PIPS_JOINTS,
     })
 }

@@ -15,7 +15,7 @@
 //! inside links, three points per link (0.1 m apart on the long links, so a
 //! 3 cm board cannot pass between two of them). Other settings: defaults.
 
-use super::scene::{arm_points, end_path_points, midpoint, Draft};
+use super::scene::Draft;
 use super::Family;
 use crate::case::{num, Case, DhJoint, Obstacle, RobotSpec, Spec, Unit};
 use crate::rng::Rng;
@@ -145,32 +145,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
     };
     let goal = draft.random_goal(rng, &start, 0.8, 0.25, 1500)?;
 
-    let boxed = |label: &'static str| {
-        move |rng: &mut Rng, centre: [f64; 3], scale: f64| {
-            let s = [0, 1, 2].map(|_| scale * rng.range(0.04, 0.1));
-            Obstacle::cuboid(label, centre, s)
-        }
-    };
-    let mid = midpoint(&start, &goal);
-    let joint_path = arm_points(draft.problem(), &mid, 2);
-    let mut placed = 0;
-    for _ in 0..1 + rng.below(2) {
-        placed += draft.place(
-            rng,
-            &joint_path,
-            &[&start, &goal],
-            8,
-            boxed("in the way (joint-space path)"),
-        ) as usize;
-    }
-    let end_path = end_path_points(draft.problem(), &start, &goal);
-    placed += draft.place(
-        rng,
-        &end_path,
-        &[&start, &goal],
-        8,
-        boxed("in the way (end-effector path)"),
-    ) as usize;
+    let placed = draft.boxes_in_the_way(rng, &start, &goal, 2, (0.04, 0.1));
     let tags = format!(
         "start {}; {boards} boards; {} obstacles ({placed} in the way)",
         if at_ready { "ready" } else { "random" },

@@ -11,7 +11,7 @@
 
 use capp_core::pips;
 
-use super::scene::{arm_points, end_path_points, midpoint, Draft};
+use super::scene::Draft;
 use super::Family;
 use crate::case::{num, Case, Obstacle, RobotSpec, Spec, Unit};
 use crate::rng::Rng;
@@ -143,33 +143,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
     };
     let goal = draft.random_goal(rng, &start, FRACTION, MIN_MOVE, 1500)?;
 
-    // In the way.
-    let boxed = |label: &'static str| {
-        move |rng: &mut Rng, centre: [f64; 3], scale: f64| {
-            let s = [0, 1, 2].map(|_| scale * rng.range(3.0, 8.0));
-            Obstacle::cuboid(label, centre, s)
-        }
-    };
-    let mid = midpoint(&start, &goal);
-    let joint_path = arm_points(draft.problem(), &mid, 5);
-    let mut placed = 0;
-    for _ in 0..1 + rng.below(2) {
-        placed += draft.place(
-            rng,
-            &joint_path,
-            &[&start, &goal],
-            8,
-            boxed("in the way (joint-space path)"),
-        ) as usize;
-    }
-    let end_path = end_path_points(draft.problem(), &start, &goal);
-    placed += draft.place(
-        rng,
-        &end_path,
-        &[&start, &goal],
-        8,
-        boxed("in the way (end-effector path)"),
-    ) as usize;
+    let placed = draft.boxes_in_the_way(rng, &start, &goal, 5, (3.0, 8.0));
 
     let tags = format!(
         "tol {tol}/{otol}; start {}; {} obstacles ({placed} in the way)",

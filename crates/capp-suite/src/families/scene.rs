@@ -140,6 +140,47 @@ impl Draft {
         false
     }
 
+    /// Boxes in the way of the motion from `start` to `goal`: one or two at
+    /// arm points of the joint-space midpoint (links from `skip` on), then
+    /// one on the straight end-effector path, each of half sizes drawn from
+    /// `half_size` (length units) and shrunk by `place` until start and goal
+    /// stay clear. Returns how many were placed.
+    pub fn boxes_in_the_way(
+        &mut self,
+        rng: &mut Rng,
+        start: &[f64],
+        goal: &[f64],
+        skip: usize,
+        half_size: (f64, f64),
+    ) -> usize {
+        let boxed = |label: &'static str| {
+            move |rng: &mut Rng, centre: [f64; 3], scale: f64| {
+                let s = [0, 1, 2].map(|_| scale * rng.range(half_size.0, half_size.1));
+                Obstacle::cuboid(label, centre, s)
+            }
+        };
+        let joint_path = arm_points(&self.problem, &midpoint(start, goal), skip);
+        let mut placed = 0;
+        for _ in 0..1 + rng.below(2) {
+            placed += self.place(
+                rng,
+                &joint_path,
+                &[start, goal],
+                8,
+                boxed("in the way (joint-space path)"),
+            ) as usize;
+        }
+        let end_path = end_path_points(&self.problem, start, goal);
+        placed += self.place(
+            rng,
+            &end_path,
+            &[start, goal],
+            8,
+            boxed("in the way (end-effector path)"),
+        ) as usize;
+        placed
+    }
+
     /// Writes the case: `start`, the target from `goal`'s forward kinematics
     /// (with its orientation when `orientation`), reads the file back as
     /// `capp run` would, and checks everything once more on what was read:
