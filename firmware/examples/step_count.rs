@@ -447,7 +447,11 @@ fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u6
         ["detour_max", "detour_mean", "detour_steps"],
         ["walk_max", "walk_mean", "walk_steps"],
         ["return_max", "return_mean", "return_steps"],
-        ["escape_start_max", "escape_start_mean", "escape_start_steps"],
+        [
+            "escape_start_max",
+            "escape_start_mean",
+            "escape_start_steps",
+        ],
     ];
     let (mut max, mut total, mut steps) = ([0u64; 5], [0u64; 5], [0u64; 5]);
     let mut previous = planner.last_report().escape;
