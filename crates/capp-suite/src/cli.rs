@@ -54,6 +54,8 @@ pub struct Options {
     pub threads: usize,
     /// `--no-oracle`.
     pub no_oracle: bool,
+    /// `--help` or `-h`: print the usage, run nothing.
+    pub help: bool,
     /// `--write-cases`.
     pub write_cases: Option<PathBuf>,
 }
@@ -69,6 +71,7 @@ impl Options {
             cases: None,
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()),
             no_oracle: false,
+            help: false,
             write_cases: None,
         };
         let mut it = args.iter();
@@ -82,6 +85,7 @@ impl Options {
             match a.as_str() {
                 "--quick" => o.quick = true,
                 "--no-oracle" => o.no_oracle = true,
+                "--help" | "-h" => o.help = true,
                 "--seed" => o.seed = value("--seed")?.parse().context("--seed")?,
                 "--cases" => o.cases = Some(value("--cases")?.parse().context("--cases")?),
                 "--threads" => o.threads = value("--threads")?.parse().context("--threads")?,
@@ -155,6 +159,10 @@ fn select<T: Clone>(
 pub fn main(args: &[String], root: &Path) -> Result<()> {
     let started = Instant::now();
     let options = Options::parse(args)?;
+    if options.help {
+        println!("{USAGE}");
+        return Ok(());
+    }
     let families: Vec<Family> = select(
         families::families(),
         &options.families,
