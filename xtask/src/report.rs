@@ -8,6 +8,8 @@ use std::process::Command;
 
 use anyhow::{bail, Result};
 
+use capp_suite::report::grouped;
+
 use crate::m4f::Counts;
 
 /// Obstacle counts of the PIPS tables (as `capp_bench::scenes::PIPS_OBSTACLES`, plus 64).
@@ -157,37 +159,13 @@ impl Machine {
                 .and_then(|s| s.lines().next().map(str::to_string))
                 .unwrap_or_else(|| "unknown".into())
         };
-        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-        let model = cpuinfo
-            .lines()
-            .find_map(|l| {
-                l.strip_prefix("model name")
-                    .map(|m| m.trim_start_matches([' ', '\t', ':']).to_string())
-            })
-            .unwrap_or_else(|| "unknown CPU".into());
+        let model = capp_suite::cli::cpu_model();
         let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
         Machine {
             cpu: format!("{model}, {cores} cores available"),
             rustc: first_line("rustc", "-V"),
             qemu: first_line("qemu-system-arm", "--version"),
         }
-    }
-}
-
-fn grouped(x: f64) -> String {
-    let v = x.round() as i64;
-    let digits = v.abs().to_string();
-    let mut out = String::new();
-    for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            out.push(' ');
-        }
-        out.push(c);
-    }
-    if v < 0 {
-        format!("-{out}")
-    } else {
-        out
     }
 }
 

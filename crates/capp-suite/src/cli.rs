@@ -112,15 +112,20 @@ impl Options {
 /// Usage text.
 pub const USAGE: &str = "usage: cargo xtask suite [--quick] [--seed N] [--family NAME[,NAME]] [--variant NAME[,NAME]] [--cases K] [--threads N] [--no-oracle] [--write-cases DIR]";
 
-fn machine() -> String {
+/// The host's CPU model, from `/proc/cpuinfo` ("unknown CPU" elsewhere).
+pub fn cpu_model() -> String {
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-    let model = cpuinfo
+    cpuinfo
         .lines()
         .find_map(|l| {
             l.strip_prefix("model name")
                 .map(|m| m.trim_start_matches([' ', '\t', ':']).to_string())
         })
-        .unwrap_or_else(|| "unknown CPU".into());
+        .unwrap_or_else(|| "unknown CPU".into())
+}
+
+fn machine() -> String {
+    let model = cpu_model();
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     let rustc = Command::new("rustc")
         .arg("-V")
