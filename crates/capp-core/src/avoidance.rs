@@ -146,7 +146,7 @@ pub struct Clearance {
 
 /// The nearest avoidance point / obstacle pair of the arm, as a half-space:
 /// every point `y` with `normal . y > offset` is outside that obstacle
-/// inflated by the joint margin (so by either margin). From the convexity of
+/// inflated by the larger of the two margins (so by either margin). From the convexity of
 /// `C`: `C(y) >= C(p) + grad C(p) . (y - p)`, which exceeds 1 wherever
 /// `grad C . (y - p) > 1 - C(p)`. Conservative advancement
 /// ([`crate::step_size::advancement`]) lets that link slide along the
@@ -286,8 +286,9 @@ pub fn potential_gradient<const N: usize>(
 }
 
 /// The half-space of [`HalfSpace`] at avoidance point `point` (on `link`)
-/// against `obstacle`, or `None` when the point is inside that obstacle's
-/// joint-margin inflation (no such half-space) or out of its influence.
+/// against `obstacle` inflated by the larger of the two margins (so it holds
+/// for every point of the link, of either kind), or `None` when the point is
+/// inside that inflation (no such half-space) or out of its influence.
 fn half_space<const N: usize>(
     frames: &Frames<N>,
     obstacles: &[Obstacle],
@@ -302,9 +303,12 @@ fn half_space<const N: usize>(
     let p = link_points(frames, settings, link as usize)
         .nth(index)?
         .position;
-    let contact = obstacles
-        .get(obstacle as usize)?
-        .contact(&p, PointKind::Joint)?;
+    let larger = if settings.joint_margin >= settings.link_margin {
+        PointKind::Joint
+    } else {
+        PointKind::Link
+    };
+    let contact = obstacles.get(obstacle as usize)?.contact(&p, larger)?;
     let slope = norm(&contact.gradient);
     if !(contact.clearance > 0.0 && contact.clearance.is_finite() && slope > 0.0) {
         return None;

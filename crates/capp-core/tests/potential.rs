@@ -113,3 +113,71 @@ fn potential_gradient_matches_central_differences() {
     }
     assert_eq!(checked, 4 * 2 * 15);
 }
+
+/// The nearest pair's half-space (what conservative advancement lets a link
+/// slide along) holds all of its obstacle inflated by either margin, whichever
+/// of the two is the larger: points sampled inside the obstacle, by the
+/// independent f64 `C`, are never on its free side.
+#[test]
+fn the_nearest_half_space_holds_the_obstacle_under_either_margin() {
+    let mut rng = Rng(23);
+    let mut frames = Frames::<32>::default();
+    let mut mu = [0.0f32; 32];
+    let mut distance = [0.0f32; 32];
+    for (joint_margin, link_margin) in [(0.5, 0.25), (0.25, 0.75)] {
+        let settings = AvoidanceSettings {
+            joint_margin,
+            link_margin,
+            points_per_link: 2,
+            influence_distance: 3.0,
+            engage_clearance: 1.0,
+            advance_fraction: 0.5,
+        };
+        let (mut planes, mut inside) = (0, 0);
+        while planes < 150 {
+            let n = 3 + rng.below(10);
+            let joints = random_chain(&mut rng, n);
+            let robot = Robot::<32>::new(&joints).unwrap();
+            let q = random_config(&mut rng, &joints);
+            let q64: Vec<f64> = q.iter().map(|&x| x as f64).collect();
+            let near = fk64(&joints, &q64).origins[1 + rng.below(n)];
+            let s = random_obstacle(&mut rng, near, 2.0);
+            let obstacle =
+                Obstacle::new(0, &s, settings.margins(), settings.influence_distance).unwrap();
+            forward_kinematics(&robot, &q, &mut frames);
+            let field = potential_gradient(
+                &robot,
+                &frames,
+                core::slice::from_ref(&obstacle),
+                &settings,
+                &mut mu[..n],
+                &mut distance[..n],
+            );
+            let Some(plane) = field.nearest.filter(|_| field.clear) else {
+                continue;
+            };
+            planes += 1;
+            let normal = plane.normal.map(f64::from);
+            let reach = s
+                .semi_axes
+                .iter()
+                .map(|&a| (a as f64 + 0.75).powi(2))
+                .sum::<f64>();
+            let reach = reach.sqrt();
+            for _ in 0..400 {
+                let y = [0, 1, 2].map(|i| s.centre[i] as f64 + rng.uniform(-reach, reach));
+                for margin in [joint_margin, link_margin] {
+                    if c64(&s, margin as f64, y) <= 1.0 {
+                        inside += 1;
+                        let free = dot(normal, y) - plane.offset as f64;
+                        assert!(
+                            free <= 1e-4 * (1.0 + reach),
+                            "margins {joint_margin}/{link_margin}: a point inside (margin {margin}) is {free} on the free side of {plane:?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(inside > 2_000, "{inside} points inside");
+    }
+}
