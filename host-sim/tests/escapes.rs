@@ -71,14 +71,14 @@ fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
             5.0,
             Kind::Detour,
             DETOUR,
-            "detour at step {step} round \"post\" on its -x side",
+            "detour at step {step} round \"post\" on its {side} side",
         ),
         (
             "walk",
             20.0,
             Kind::Walk,
             WALK,
-            "walk at step {step} to the +y side of \"post\"",
+            "walk at step {step} to the {side} side of \"post\"",
         ),
     ] {
         let out = run(dir.path(), name, &scenario(name, half_height));
@@ -101,7 +101,13 @@ fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
         let step = stretches[0].step;
         let window = capp_core::Settings::default().escape.window as u32;
         assert!(step > window, "{name}: escape at step {step}");
-        let phrase = phrase.replace("{step}", &step.to_string());
+        // Round the post (its only obstacle), on the side the CSV names.
+        let side = stretches[0].side.expect("an escape round the post");
+        assert_eq!(side.obstacle, 0, "{name}: {side:?}");
+        let side = escapes::side_name(side);
+        let phrase = phrase
+            .replace("{step}", &step.to_string())
+            .replace("{side}", &side);
         assert!(summary.contains(&phrase), "{phrase}\n{summary}");
 
         // arm.svg: the stretch in its colour in each of the three views, a
@@ -133,12 +139,13 @@ fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
         let states = states.split("],").next().unwrap();
         let escaping = states.split(',').filter(|s| *s != "null").count();
         assert!(escaping >= 5, "{name}: {escaping} frames escaping");
+        let side = side.replace('-', "−");
         let expected = if kind == Kind::Detour {
-            "\"detour 1 round \\\"post\\\", its −x side\""
+            format!("\"detour 1 round \\\"post\\\", its {side} side\"")
         } else {
-            "\"walk 1 to the +y side of \\\"post\\\"\""
+            format!("\"walk 1 to the {side} side of \\\"post\\\"\"")
         };
-        assert!(states.contains(expected), "{name}: {states}");
+        assert!(states.contains(&expected), "{name}: {states}");
         assert!(
             run.contains(&format!(
                 "{{\"kind\": \"{}\", \"colour\": \"{}\", \"step\": {step},",

@@ -92,8 +92,8 @@ impl Default for EscapeSettings {
         EscapeSettings {
             attempts: 64,
             window: 20,
-            walk_steps: 120,
-            reach: 0.25,
+            walk_steps: 200,
+            reach: 0.5,
             seed: 0x2545_F491,
         }
     }

@@ -182,8 +182,8 @@ fn every_command_is_pinned() {
         max_halvings: 8,
         escape_attempts: 64,
         escape_window: 20,
-        escape_walk_steps: 120,
-        escape_reach: 0.25,
+        escape_walk_steps: 200,
+        escape_reach: 0.5,
         escape_seed: 0x2545_F491,
     };
     check(
@@ -211,8 +211,8 @@ fn every_command_is_pinned() {
             0x08, // max_halvings
             0x40, // escape_attempts 64
             0x14, // escape_window 20
-            0x78, // escape_walk_steps 120
-            0x00, 0x00, 0x80, 0x3E, // 0.25
+            0xC8, 0x01, // escape_walk_steps 200
+            0x00, 0x00, 0x00, 0x3F, // 0.5
             0x91, 0xE9, 0x97, 0xAA, 0x02, // 0x2545F491
         ],
     );
