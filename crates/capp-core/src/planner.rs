@@ -589,6 +589,16 @@ impl<const N: usize> Planner<N> {
             settings.avoidance.joint_margin,
             &mut self.next.frames,
         );
+        // A detour begins: from now on `now.error` is its point's (the
+        // configuration does not change until the next step; later steps
+        // evaluate against the point).
+        if let Some(point) = self.escape.subgoal() {
+            self.now.error = pose_error(
+                &self.now.frames,
+                &Target::pose(point, None),
+                settings.law.orientation_scale,
+            );
+        }
     }
 
     /// After a step of a walk or a detour: is it over? A finished walk or
@@ -663,13 +673,6 @@ impl<const N: usize> Planner<N> {
             Some(point) => Target::pose(point, None),
             None => target,
         };
-        if detour.is_some() {
-            self.now.error = pose_error(
-                &self.now.frames,
-                &drive_target,
-                settings.law.orientation_scale,
-            );
-        }
 
         // The law proposes a rate and a step (eqs. 13-18, 24).
         let engage = strength(
