@@ -300,6 +300,27 @@ pub fn markdown(
     markdown_with_figures(info, families, variants, results, shipped, &[])
 }
 
+/// One table line per family (those with results) and variant: `row` of
+/// their tally, led by `family | variant`.
+fn family_rows(
+    s: &mut String,
+    results: &[CaseResult],
+    families: &[Family],
+    variants: &[Variant],
+    row: impl Fn(&Tally, &str) -> String,
+) {
+    for f in families {
+        let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
+        if of.is_empty() {
+            continue;
+        }
+        for v in variants {
+            let line = row(&Tally::new(&of, v.name), &format!("{} | {}", f.name, v.name));
+            let _ = writeln!(s, "{line}");
+        }
+    }
+}
+
 /// [`markdown`] with `figures` (relative path, alt text, caption) embedded
 /// after the overall table.
 pub fn markdown_with_figures(
@@ -378,19 +399,7 @@ pub fn markdown_with_figures(
     let _ = writeln!(s, "| family | variant {TABLE_HEAD}");
     let _ = writeln!(s, "|---|---{TABLE_RULE}");
     let all: Vec<&CaseResult> = results.iter().collect();
-    for f in families {
-        let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
-        if of.is_empty() {
-            continue;
-        }
-        for v in variants {
-            let _ = writeln!(
-                s,
-                "{}",
-                Tally::new(&of, v.name).row(&format!("{} | {}", f.name, v.name))
-            );
-        }
-    }
+    family_rows(&mut s, results, families, variants, |t, lead| t.row(lead));
 
     s.push_str("\n## Overall\n\n");
     let _ = writeln!(s, "| variant {TABLE_HEAD}");
@@ -423,19 +432,7 @@ pub fn markdown_with_figures(
     );
     let _ = writeln!(s, "| family | variant {ESCAPE_HEAD}");
     let _ = writeln!(s, "|---|---{ESCAPE_RULE}");
-    for f in families {
-        let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.family == f.name).collect();
-        if of.is_empty() {
-            continue;
-        }
-        for v in variants {
-            let _ = writeln!(
-                s,
-                "{}",
-                Tally::new(&of, v.name).escape_row(&format!("{} | {}", f.name, v.name))
-            );
-        }
-    }
+    family_rows(&mut s, results, families, variants, |t, lead| t.escape_row(lead));
     for v in variants {
         let _ = writeln!(
             s,
