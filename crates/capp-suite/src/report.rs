@@ -315,7 +315,10 @@ fn family_rows(
             continue;
         }
         for v in variants {
-            let line = row(&Tally::new(&of, v.name), &format!("{} | {}", f.name, v.name));
+            let line = row(
+                &Tally::new(&of, v.name),
+                &format!("{} | {}", f.name, v.name),
+            );
             let _ = writeln!(s, "{line}");
         }
     }
@@ -432,7 +435,9 @@ pub fn markdown_with_figures(
     );
     let _ = writeln!(s, "| family | variant {ESCAPE_HEAD}");
     let _ = writeln!(s, "|---|---{ESCAPE_RULE}");
-    family_rows(&mut s, results, families, variants, |t, lead| t.escape_row(lead));
+    family_rows(&mut s, results, families, variants, |t, lead| {
+        t.escape_row(lead)
+    });
     for v in variants {
         let _ = writeln!(
             s,
