@@ -24,15 +24,21 @@ pub enum Kind {
     Walk,
     /// The attempts spent: back to the best configuration (the run then ends `Stalled`).
     Return,
+    /// A search for a path, the arm holding still (`capp_core::tree`).
+    Search,
+    /// The walk along the path a search found.
+    Path,
 }
 
 impl Kind {
-    /// `detour`, `walk`, `return`.
+    /// `detour`, `walk`, `return`, `search`, `path`.
     pub fn name(self) -> &'static str {
         match self {
             Kind::Detour => "detour",
             Kind::Walk => "walk",
             Kind::Return => "return",
+            Kind::Search => "search",
+            Kind::Path => "path",
         }
     }
 }
@@ -45,6 +51,8 @@ pub fn classify(state: EscapeState) -> Option<(Kind, u8, Option<Side>)> {
         EscapeState::Detouring { attempt, side } => Some((Kind::Detour, attempt, Some(side))),
         EscapeState::Walking { attempt, side } => Some((Kind::Walk, attempt, side)),
         EscapeState::Returning => Some((Kind::Return, 0, None)),
+        EscapeState::Searching { attempt, side } => Some((Kind::Search, attempt, side)),
+        EscapeState::Following { attempt, side } => Some((Kind::Path, attempt, side)),
     }
 }
 
@@ -126,9 +134,9 @@ pub fn side_name(s: Side) -> String {
 }
 
 /// What the `escape` column of the trajectory CSV says: empty while the law
-/// drives, else `walk K`, `walk K obstacle O +z`, `detour K obstacle O -x`
-/// (1-based attempt and obstacle, the side of the obstacle in its own frame)
-/// or `return`.
+/// drives, else `walk K`, `walk K obstacle O +z`, `detour K obstacle O -x`,
+/// `search K [obstacle O +y]`, `path K [obstacle O +y]` (1-based attempt and
+/// obstacle, the side of the obstacle in its own frame) or `return`.
 pub fn label(state: EscapeState) -> String {
     let side = |s: Side| format!("obstacle {} {}", s.obstacle as u32 + 1, side_name(s));
     match state {
@@ -143,6 +151,14 @@ pub fn label(state: EscapeState) -> String {
         } => format!("walk {attempt} {}", side(s)),
         EscapeState::Detouring { attempt, side: s } => format!("detour {attempt} {}", side(s)),
         EscapeState::Returning => "return".into(),
+        EscapeState::Searching { attempt, side: s } => match s {
+            Some(s) => format!("search {attempt} {}", side(s)),
+            None => format!("search {attempt}"),
+        },
+        EscapeState::Following { attempt, side: s } => match s {
+            Some(s) => format!("path {attempt} {}", side(s)),
+            None => format!("path {attempt}"),
+        },
     }
 }
 
@@ -152,7 +168,7 @@ pub fn label(state: EscapeState) -> String {
 pub fn parse_label(text: &str) -> Result<Option<EscapeState>, String> {
     let words: Vec<&str> = text.split_whitespace().collect();
     let bad = || {
-        format!("\"{text}\" is not an escape state (walk K [obstacle O +x], detour K obstacle O -y, return)")
+        format!("\"{text}\" is not an escape state (walk K [obstacle O +x], detour K obstacle O -y, search K [obstacle O +x], path K [obstacle O +x], return)")
     };
     let attempt = |w: &str| w.parse::<u8>().ok().filter(|&a| a > 0);
     let side = |o: &str, s: &str| -> Option<Side> {
@@ -183,6 +199,22 @@ pub fn parse_label(text: &str) -> Result<Option<EscapeState>, String> {
             side: None,
         })),
         ["walk", k, "obstacle", o, s] => Ok(Some(EscapeState::Walking {
+            attempt: attempt(k).ok_or_else(bad)?,
+            side: Some(side(o, s).ok_or_else(bad)?),
+        })),
+        ["search", k] => Ok(Some(EscapeState::Searching {
+            attempt: attempt(k).ok_or_else(bad)?,
+            side: None,
+        })),
+        ["search", k, "obstacle", o, s] => Ok(Some(EscapeState::Searching {
+            attempt: attempt(k).ok_or_else(bad)?,
+            side: Some(side(o, s).ok_or_else(bad)?),
+        })),
+        ["path", k] => Ok(Some(EscapeState::Following {
+            attempt: attempt(k).ok_or_else(bad)?,
+            side: None,
+        })),
+        ["path", k, "obstacle", o, s] => Ok(Some(EscapeState::Following {
             attempt: attempt(k).ok_or_else(bad)?,
             side: Some(side(o, s).ok_or_else(bad)?),
         })),
@@ -222,6 +254,22 @@ mod tests {
                 attempt: 1,
                 side: side(0, 0, false),
             },
+            EscapeState::Searching {
+                attempt: 2,
+                side: None,
+            },
+            EscapeState::Searching {
+                attempt: 5,
+                side: Some(side(1, 1, false)),
+            },
+            EscapeState::Following {
+                attempt: 2,
+                side: None,
+            },
+            EscapeState::Following {
+                attempt: 7,
+                side: Some(side(2, 0, true)),
+            },
         ] {
             assert_eq!(parse_label(&label(state)), Ok(Some(state)), "{state:?}");
         }
@@ -242,6 +290,9 @@ mod tests {
             "detour 1 obstacle 1 +w",
             "detour 1 obstacle 1 x",
             "returning",
+            "search",
+            "path 0",
+            "search 1 obstacle 1",
         ] {
             assert!(parse_label(bad).is_err(), "{bad}");
         }

@@ -182,8 +182,12 @@ pub struct Return {
 /// The dead-end escapes of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EscapeSummary {
-    /// Every walk and detour, in order (the return is [`EscapeSummary::returned`]).
+    /// Every walk, detour and searched path, in order (the return is
+    /// [`EscapeSummary::returned`]).
     pub attempts: Vec<EscapeLine>,
+    /// Searches for a path made (each before a walk or a path of the same
+    /// attempt; the arm holds still while one runs).
+    pub searches: usize,
     /// The run ended by walking back to the best configuration.
     pub returned: Option<Return>,
     /// How the run ended.
@@ -208,9 +212,10 @@ impl EscapeSummary {
             _ => format!("obstacle {}", o as u32 + 1),
         };
         let stretches = escapes::of_rows(rows);
+        let searches = stretches.iter().filter(|s| s.kind == Kind::Search).count();
         let attempts = stretches
             .iter()
-            .filter(|s| s.kind != Kind::Return)
+            .filter(|s| s.kind != Kind::Return && s.kind != Kind::Search)
             .map(|s| EscapeLine {
                 stretch: *s,
                 steps: rows[s.end(rows.len())].step - rows[s.first].step,
@@ -244,6 +249,7 @@ impl EscapeSummary {
             });
         Some(EscapeSummary {
             attempts,
+            searches,
             returned,
             outcome: result.outcome,
             unit: problem.length_unit.clone(),
@@ -309,6 +315,11 @@ fn escape_phrase(line: &EscapeLine) -> String {
         (Kind::Detour, Some(o)) => {
             format!("detour at step {} round {o} on its {side} side", s.step)
         }
+        (Kind::Path, Some(o)) => format!(
+            "searched path at step {} to the {side} side of {o}",
+            s.step
+        ),
+        (Kind::Path, None) => format!("searched path at step {}", s.step),
         (_, Some(o)) => format!("walk at step {} to the {side} side of {o}", s.step),
         (_, None) => format!("walk at step {} (no obstacle blocking)", s.step),
     };
@@ -326,15 +337,29 @@ impl fmt::Display for EscapeSummary {
             .count();
         let plural =
             |k: usize, one: &str, many: &str| format!("{k} {}", if k == 1 { one } else { many });
+        let paths = self
+            .attempts
+            .iter()
+            .filter(|l| l.stretch.kind == Kind::Path)
+            .count();
         if n == 0 {
             writeln!(f, "escapes:           none")?;
         } else {
+            let searched = if self.searches > 0 {
+                format!(
+                    ", {} ({} found a path)",
+                    plural(self.searches, "search", "searches"),
+                    paths
+                )
+            } else {
+                String::new()
+            };
             write!(
                 f,
-                "escapes:           {} ({}, {})",
+                "escapes:           {} ({}, {}{searched})",
                 plural(n, "attempt", "attempts"),
                 plural(detours, "detour", "detours"),
-                plural(n - detours, "walk", "walks")
+                plural(n - detours - paths, "walk", "walks")
             )?;
             if n <= LISTED {
                 writeln!(f)?;
@@ -365,6 +390,7 @@ impl fmt::Display for EscapeSummary {
                                     g.sides.iter().map(|(s, c)| format!("{s} {c}")).collect();
                                 let (round, what) = match g.kind {
                                     Kind::Detour => ("round ", plural(k, "detour", "detours")),
+                                    Kind::Path => ("", plural(k, "searched path", "searched paths")),
                                     _ => ("", plural(k, "walk", "walks")),
                                 };
                                 format!("{round}{o} {} ({what})", list.join(", "))

@@ -48,6 +48,7 @@ use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{max, min, norm, Vec3};
 use crate::obstacle::Obstacle;
 use crate::robot::{JointKind, Robot};
+use crate::tree::{Search, TREE_NODES};
 
 /// Dead ends remembered per waypoint (a ring: the oldest is forgotten).
 pub const MEMORY: usize = 8;
@@ -85,6 +86,10 @@ pub struct EscapeSettings {
     pub reach: f32,
     /// Seed of the walks' generator (mixed with the start configuration).
     pub seed: u32,
+    /// Searches per waypoint ([`crate::tree`]): the first attempts that
+    /// would walk search for a path first (the arm holding still), and walk
+    /// it when one is found; 0 turns searches off.
+    pub searches: u8,
 }
 
 impl Default for EscapeSettings {
@@ -95,6 +100,7 @@ impl Default for EscapeSettings {
             walk_steps: 200,
             reach: 0.5,
             seed: 0x2545_F491,
+            searches: 4,
         }
     }
 }
@@ -136,6 +142,23 @@ pub enum EscapeState {
         /// The side of the blocking obstacle taken, if an obstacle blocked.
         side: Option<Side>,
     },
+    /// Searching for a path in imagination, the arm holding still
+    /// ([`crate::tree`]); if none is found, the walk drawn for this attempt.
+    Searching {
+        /// Which attempt (1-based).
+        attempt: u8,
+        /// The side of the blocking obstacle the fallback walk takes, if an
+        /// obstacle blocked.
+        side: Option<Side>,
+    },
+    /// Walking the path the search found, node by node.
+    Following {
+        /// Which attempt (1-based).
+        attempt: u8,
+        /// The side of the blocking obstacle the fallback walk would have
+        /// taken, if an obstacle blocked.
+        side: Option<Side>,
+    },
     /// The attempts are spent: back to the best configuration, then `Stalled`.
     Returning,
 }
@@ -170,6 +193,13 @@ pub struct Escape<const N: usize> {
     memory: [DeadEnd; MEMORY],
     remembered: u8,
     next_slot: u8,
+    /// The search of the current attempt, and the path the walk follows
+    /// through its tree (node indices, root first; empty for a plain walk).
+    search: Search<N>,
+    searches: u8,
+    path: [u8; TREE_NODES],
+    path_len: u8,
+    path_at: u8,
 }
 
 impl<const N: usize> Escape<N> {
@@ -189,6 +219,11 @@ impl<const N: usize> Escape<N> {
             memory: [DeadEnd::default(); MEMORY],
             remembered: 0,
             next_slot: 0,
+            search: Search::default(),
+            searches: 0,
+            path: [0; TREE_NODES],
+            path_len: 0,
+            path_at: 0,
         };
         escape.reset(seed, start);
         escape
@@ -210,6 +245,11 @@ impl<const N: usize> Escape<N> {
             memory,
             remembered,
             next_slot,
+            search,
+            searches,
+            path,
+            path_len,
+            path_at,
         } = self;
         // FNV-1a over the start's bits, then the seed; never zero (xorshift).
         let mut h: u32 = 0x811C_9DC5 ^ seed;
@@ -232,6 +272,11 @@ impl<const N: usize> Escape<N> {
         memory.fill(DeadEnd::default());
         *remembered = 0;
         *next_slot = 0;
+        *search = Search::default();
+        *searches = 0;
+        path.fill(0);
+        *path_len = 0;
+        *path_at = 0;
     }
 
     /// A new waypoint: its dead ends and attempts start from nothing (the
@@ -240,6 +285,8 @@ impl<const N: usize> Escape<N> {
         self.state = EscapeState::Descending { attempts: 0 };
         self.remembered = 0;
         self.next_slot = 0;
+        self.searches = 0;
+        self.path_len = 0;
         self.best_v = v;
         let len = q.len().min(N);
         self.best_q[..len].copy_from_slice(&q[..len]);
@@ -253,7 +300,9 @@ impl<const N: usize> Escape<N> {
     /// The goal of the current walk (or of the return), when there is one.
     pub fn goal(&self) -> Option<&[f32; N]> {
         match self.state {
-            EscapeState::Walking { .. } | EscapeState::Returning => Some(&self.goal),
+            EscapeState::Walking { .. }
+            | EscapeState::Following { .. }
+            | EscapeState::Returning => Some(&self.goal),
             _ => None,
         }
     }
@@ -275,8 +324,47 @@ impl<const N: usize> Escape<N> {
         }
     }
 
+    /// The current attempt's search ([`crate::tree`]).
+    pub fn search_mut(&mut self) -> &mut Search<N> {
+        &mut self.search
+    }
+
+    /// The search found a path to its node `end`: walk it, node by node.
+    pub fn follow(&mut self, end: usize) {
+        if let EscapeState::Searching { attempt, side } = self.state {
+            let len = self.search.tree.path(end, &mut self.path);
+            self.start_walk(EscapeState::Following { attempt, side });
+            self.path_len = len as u8;
+            self.path_at = 0;
+            self.next_node();
+        }
+    }
+
+    /// The search found nothing: the walk drawn for this attempt instead.
+    pub fn search_failed(&mut self) {
+        if let EscapeState::Searching { attempt, side } = self.state {
+            self.start_walk(EscapeState::Walking { attempt, side });
+        }
+    }
+
+    /// On to the next node of the path, if there is one.
+    fn next_node(&mut self) -> bool {
+        let next = self.path_at as usize + 1;
+        match self.path.get(next) {
+            Some(&i) if next < self.path_len as usize => {
+                self.path_at = next as u8;
+                self.goal = *self.search.tree.node(i as usize);
+                self.walked = 0;
+                self.idle = 0;
+                self.closest = f32::INFINITY;
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// Uniform in `[-1, 1)` (xorshift32).
-    fn uniform(&mut self) -> f32 {
+    pub fn uniform(&mut self) -> f32 {
         let mut x = self.rng;
         x ^= x << 13;
         x ^= x >> 17;
@@ -402,15 +490,26 @@ impl<const N: usize> Escape<N> {
             forward_kinematics(robot, &self.goal[..n], scratch);
             Some(side_of(obstacle, o, scratch.end_position()))
         });
-        self.start_walk(EscapeState::Walking {
-            attempt: attempts + 1,
-            side,
-        });
+        if self.searches < settings.searches {
+            // Search first (the arm holds still); this walk if nothing is found.
+            self.searches += 1;
+            self.search.begin(q, v);
+            self.start_walk(EscapeState::Searching {
+                attempt: attempts + 1,
+                side,
+            });
+        } else {
+            self.start_walk(EscapeState::Walking {
+                attempt: attempts + 1,
+                side,
+            });
+        }
         true
     }
 
     fn start_walk(&mut self, state: EscapeState) {
         self.state = state;
+        self.path_len = 0;
         self.walked = 0;
         self.idle = 0;
         self.closest = f32::INFINITY;
@@ -438,10 +537,19 @@ impl<const N: usize> Escape<N> {
             EscapeState::Detouring { .. } => (settings.walk_steps, settings.window),
             _ => (settings.walk_steps, WALK_PATIENCE),
         };
+        if gap <= reached
+            && matches!(self.state, EscapeState::Following { .. })
+            && self.next_node()
+        {
+            return false;
+        }
         let over = gap <= reached || self.idle >= patience || self.walked >= limit;
         if over {
+            self.path_len = 0;
             match self.state {
-                EscapeState::Walking { attempt, .. } | EscapeState::Detouring { attempt, .. } => {
+                EscapeState::Walking { attempt, .. }
+                | EscapeState::Following { attempt, .. }
+                | EscapeState::Detouring { attempt, .. } => {
                     self.state = EscapeState::Descending { attempts: attempt };
                 }
                 _ => {}

@@ -47,7 +47,7 @@
 //! * Every transcendental goes through `libm` or [`math::sin_cos`] (plain `f32`
 //!   operations, which round alike everywhere), so the same inputs give the
 //!   same bits on the host and on a Cortex-M4F.
-#![no_std]
+#![cfg_attr(not(feature = "trace"), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -69,6 +69,7 @@ pub mod robot;
 pub mod scenario;
 pub mod setpoint;
 pub mod step_size;
+pub mod tree;
 
 pub use mission::{Mission, MissionError, Settings, Waypoint};
 pub use obstacle::{ObstacleError, SuperEllipsoid};

@@ -130,6 +130,7 @@ impl From<capp_core::Settings> for Settings {
             escape_walk_steps: s.escape.walk_steps as u32,
             escape_reach: s.escape.reach,
             escape_seed: s.escape.seed,
+            escape_searches: s.escape.searches,
         }
     }
 }
@@ -171,6 +172,7 @@ impl From<Settings> for capp_core::Settings {
                 walk_steps: u16::try_from(s.escape_walk_steps).unwrap_or(0),
                 reach: s.escape_reach,
                 seed: s.escape_seed,
+                searches: s.escape_searches,
             },
         }
     }
@@ -229,6 +231,8 @@ pub fn escape_status(e: capp_core::escape::EscapeState) -> (EscapeMode, u8) {
             E::Walking { attempt, .. } => (EscapeMode::Walking, attempt),
             E::Detouring { attempt, .. } => (EscapeMode::Detouring, attempt),
             E::Returning => (EscapeMode::Returning, 0),
+            E::Searching { attempt, .. } => (EscapeMode::Searching, attempt),
+            E::Following { attempt, .. } => (EscapeMode::Following, attempt),
         }
     }
 }

@@ -37,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 3;
+pub const VERSION: u8 = 4;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -175,6 +175,8 @@ pub struct Settings {
     pub escape_reach: f32,
     /// Seed of the walks' generator.
     pub escape_seed: u32,
+    /// Searches for a path per waypoint, before walking (0: none; since version 4).
+    pub escape_searches: u8,
 }
 
 /// The listing's setpoint rule (`joints.dat`): a setpoint whenever the
@@ -413,6 +415,10 @@ pub enum EscapeMode {
     Detouring,
     /// 3: the attempts spent, back to the best configuration.
     Returning,
+    /// 4: searching for a path, the arm holding still (since version 4).
+    Searching,
+    /// 5: walking the path a search found (since version 4).
+    Following,
 }
 
 /// Board to host.

@@ -50,6 +50,11 @@ pub struct EscapeCounts {
     pub walks: u32,
     /// Detours round a blocking obstacle made.
     pub detours: u32,
+    /// Searches for a path made (`capp_core::tree`; each before a walk or a
+    /// path of the same attempt).
+    pub searches: u32,
+    /// Paths found by a search and walked.
+    pub paths: u32,
     /// Whether the run ended by the return to the best configuration (every
     /// attempt spent).
     pub returned: bool,
@@ -61,9 +66,9 @@ pub struct EscapeCounts {
 }
 
 impl EscapeCounts {
-    /// Walks and detours.
+    /// Walks, detours and searched paths.
     pub fn attempts(&self) -> u32 {
-        self.walks + self.detours
+        self.walks + self.detours + self.paths
     }
 
     /// The escapes of `rows`.
@@ -73,6 +78,12 @@ impl EscapeCounts {
             match s.kind {
                 Kind::Walk => c.walks += 1,
                 Kind::Detour => c.detours += 1,
+                Kind::Path => c.paths += 1,
+                Kind::Search => {
+                    c.searches += 1;
+                    c.first_step.get_or_insert(s.step);
+                    continue;
+                }
                 Kind::Return => {
                     c.returned = true;
                     continue;

@@ -257,7 +257,7 @@ impl Tally<'_> {
             .and_then(|(a, b)| ratio(a, b));
         let returned = self.runs.iter().filter(|(_, m)| m.escape.returned).count();
         format!(
-            "| {lead} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {lead} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             self.runs.len(),
             escaped.len(),
             reached.len(),
@@ -270,12 +270,13 @@ impl Tally<'_> {
             returned,
             side_counts(&self.runs, Kind::Detour),
             side_counts(&self.runs, Kind::Walk),
+            side_counts(&self.runs, Kind::Path),
         )
     }
 }
 
-const ESCAPE_HEAD: &str = "| runs | escaped (any attempt) | escaped and reached | attempts of those, median / max | their motion time, median (s) | RRT shortcut path on the same cases, median (s) | motion / RRT: ratio of the medians | motion / RRT: median of the ratios | ended by the return (attempts spent) | detours: sides taken | walks: sides taken |";
-const ESCAPE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|";
+const ESCAPE_HEAD: &str = "| runs | escaped (any attempt) | escaped and reached | attempts of those, median / max | their motion time, median (s) | RRT shortcut path on the same cases, median (s) | motion / RRT: ratio of the medians | motion / RRT: median of the ratios | ended by the return (attempts spent) | detours: sides taken | walks: sides taken | searched paths: sides taken |";
+const ESCAPE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | contacts within rounding | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
 const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
@@ -719,7 +720,7 @@ fn escape_sides(e: &crate::metrics::EscapeCounts) -> String {
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_returned,escape_first_step,escape_sides,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
     // A refused file: every measurement column empty (all but the case's 4,
@@ -748,7 +749,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:.3},{tail},",
                         capp_sim::output::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -769,6 +770,8 @@ pub fn csv(results: &[CaseResult]) -> String {
                         m.escape.attempts(),
                         m.escape.walks,
                         m.escape.detours,
+                        m.escape.searches,
+                        m.escape.paths,
                         m.escape.returned,
                         m.escape.first_step.map_or(String::new(), |x| x.to_string()),
                         escape_sides(&m.escape),

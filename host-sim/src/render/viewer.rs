@@ -98,6 +98,11 @@ pub fn escape_phrase(problem: &Problem, state: capp_core::escape::EscapeState) -
         (Kind::Detour, Some((o, s))) => format!("detour {attempt} round {o}, its {s} side"),
         (Kind::Walk, Some((o, s))) => format!("walk {attempt} to the {s} side of {o}"),
         (Kind::Walk | Kind::Detour, None) => format!("walk {attempt}, no obstacle blocking"),
+        (Kind::Search, _) => format!("search {attempt} for a path (the arm holds still)"),
+        (Kind::Path, Some((o, s))) => {
+            format!("path {attempt} found by a search, to the {s} side of {o}")
+        }
+        (Kind::Path, None) => format!("path {attempt} found by a search"),
         (Kind::Return, _) => "return to the best configuration".into(),
     })
 }

@@ -28,6 +28,8 @@ pub const DETOUR: Rgb = [0, 150, 160];
 pub const WALK: Rgb = [235, 135, 0];
 /// ... while returning to the best configuration (dashed).
 pub const RETURN: Rgb = [150, 90, 40];
+/// ... while walking a path a search found.
+pub const SEARCHED: Rgb = [140, 60, 170];
 
 /// The colour of an escape stretch in every picture.
 pub fn escape_color(kind: Kind) -> Rgb {
@@ -35,6 +37,7 @@ pub fn escape_color(kind: Kind) -> Rgb {
         Kind::Detour => DETOUR,
         Kind::Walk => WALK,
         Kind::Return => RETURN,
+        Kind::Search | Kind::Path => SEARCHED,
     }
 }
 
@@ -44,6 +47,7 @@ pub fn escape_legend(stretches: &[Stretch]) -> Vec<(String, Rgb, Marker)> {
     for (kind, name) in [
         (Kind::Detour, "detour round an obstacle"),
         (Kind::Walk, "walk from a dead end"),
+        (Kind::Path, "path found by a search"),
         (Kind::Return, "return to the best configuration"),
     ] {
         if stretches.iter().any(|s| s.kind == kind) {

@@ -30,7 +30,9 @@ use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
 use crate::control::damped::damped_rate;
 use crate::control::first_order::first_order_rate;
 use crate::control::joint_space::{gap, joint_rate, joint_v};
-use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
+use crate::control::{
+    pose_error, Drive, LawKind, LawWorkspace, PoseError, Target,
+};
 use crate::escape::{Escape, EscapeState};
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{all_finite, norm};
@@ -40,11 +42,14 @@ use crate::robot::Robot;
 use crate::scenario::Scenario;
 use crate::step_size::advancement;
 
+mod search;
+
 /// Fraction of `engage_clearance` (in `C - 1`) below which a step may not
 /// bring the closest pair closer: the arm stops short of resting on an
 /// inflated surface (where `f32` rounding decides contact) instead of
 /// creeping onto it in ever smaller steps.
 pub const CONTACT_FLOOR: f32 = 0.01;
+
 
 /// Pose error, as a fraction of the robot's reach, below which a stall is
 /// `f32` rounding, not a dead end: no escape is tried.
@@ -663,6 +668,22 @@ impl<const N: usize> Planner<N> {
         };
         if self.step >= settings.max_steps {
             self.phase = Phase::Done(Outcome::Capped);
+            self.last = self.report(0.0, false, 0);
+            return Ok(self.last);
+        }
+        // Searching for a path: the arm holds still while a slice of the
+        // search runs; a path found is walked, else this attempt's walk.
+        if matches!(self.escape.state(), EscapeState::Searching { .. }) {
+            match self.search_slice(scenario, &target) {
+                search::Slice::Working => {}
+                search::Slice::Found(node) => self.escape.follow(node),
+                search::Slice::Failed => self.escape.search_failed(),
+            }
+            self.step += 1;
+            self.rate[..n].fill(0.0);
+            if self.step >= settings.max_steps {
+                self.phase = Phase::Done(Outcome::Capped);
+            }
             self.last = self.report(0.0, false, 0);
             return Ok(self.last);
         }
