@@ -106,3 +106,15 @@ fn a_dead_end_escaped_on_the_board_is_the_host_plan() {
     let n = serial_matches_run("pips_escape.toml", &elf);
     assert!(n > 20, "{n} setpoints");
 }
+
+/// The search (`capp_core::tree`) on the board: it holds the arm still for
+/// its slices, walks the tree's path and reaches the target, the host's plan
+/// to the bit.
+#[test]
+fn a_searched_path_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("planar_search.toml", &elf);
+    assert!(n > 1, "{n} setpoints");
+}

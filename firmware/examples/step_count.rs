@@ -431,7 +431,8 @@ fn main() -> ! {
 
 /// Every step of `scene` from its start to the end of the run, one at a
 /// time: the most instructions of a step in each escape state (plain
-/// descent, detour, walk, return to the best configuration), and of the
+/// descent, detour, walk, return to the best configuration, a slice of a
+/// search, a step along a searched path), and of the
 /// steps that start an escape (the law's step plus choosing the detour or
 /// drawing and scoring the walk's candidates), with the step counts.
 fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u64) {
@@ -442,7 +443,7 @@ fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u6
         hprintln!("M4F {} {} {} error start", name, n, m);
         return;
     };
-    const WHAT: [[&str; 3]; 5] = [
+    const WHAT: [[&str; 3]; 7] = [
         ["descend_max", "descend_mean", "descend_steps"],
         ["detour_max", "detour_mean", "detour_steps"],
         ["walk_max", "walk_mean", "walk_steps"],
@@ -452,8 +453,10 @@ fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u6
             "escape_start_mean",
             "escape_start_steps",
         ],
+        ["search_max", "search_mean", "search_steps"],
+        ["path_max", "path_mean", "path_steps"],
     ];
-    let (mut max, mut total, mut steps) = ([0u64; 5], [0u64; 5], [0u64; 5]);
+    let (mut max, mut total, mut steps) = ([0u64; 7], [0u64; 7], [0u64; 7]);
     let mut previous = planner.last_report().escape;
     while !planner.is_done() {
         let mut state = previous;
@@ -469,11 +472,15 @@ fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u6
             },
         );
         let descending = |s| matches!(s, EscapeState::Descending { .. });
-        let bucket = match state {
-            EscapeState::Descending { .. } => 0,
-            EscapeState::Detouring { .. } => 1,
-            EscapeState::Walking { .. } => 2,
-            EscapeState::Returning => 3,
+        // A step that ran a slice of a search began in that state.
+        let bucket = match (previous, state) {
+            (EscapeState::Searching { .. }, _) => 5,
+            (_, EscapeState::Descending { .. }) => 0,
+            (_, EscapeState::Detouring { .. }) => 1,
+            (_, EscapeState::Walking { .. }) => 2,
+            (_, EscapeState::Returning) => 3,
+            (_, EscapeState::Searching { .. }) => 5,
+            (_, EscapeState::Following { .. }) => 6,
         };
         let starts = descending(previous) && !descending(state);
         for b in [Some(bucket), starts.then_some(4)].into_iter().flatten() {

@@ -315,10 +315,9 @@ fn escape_phrase(line: &EscapeLine) -> String {
         (Kind::Detour, Some(o)) => {
             format!("detour at step {} round {o} on its {side} side", s.step)
         }
-        (Kind::Path, Some(o)) => format!(
-            "searched path at step {} to the {side} side of {o}",
-            s.step
-        ),
+        (Kind::Path, Some(o)) => {
+            format!("searched path at step {} to the {side} side of {o}", s.step)
+        }
         (Kind::Path, None) => format!("searched path at step {}", s.step),
         (_, Some(o)) => format!("walk at step {} to the {side} side of {o}", s.step),
         (_, None) => format!("walk at step {} (no obstacle blocking)", s.step),
@@ -390,7 +389,9 @@ impl fmt::Display for EscapeSummary {
                                     g.sides.iter().map(|(s, c)| format!("{s} {c}")).collect();
                                 let (round, what) = match g.kind {
                                     Kind::Detour => ("round ", plural(k, "detour", "detours")),
-                                    Kind::Path => ("", plural(k, "searched path", "searched paths")),
+                                    Kind::Path => {
+                                        ("", plural(k, "searched path", "searched paths"))
+                                    }
                                     _ => ("", plural(k, "walk", "walks")),
                                 };
                                 format!("{round}{o} {} ({what})", list.join(", "))

@@ -176,6 +176,7 @@ struct SettingsSpec {
     escape_walk_steps: Option<u16>,
     escape_reach: Option<f64>,
     escape_seed: Option<u32>,
+    escape_searches: Option<u8>,
 }
 
 #[derive(Deserialize)]
@@ -586,6 +587,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     settings.escape.reach = f(s.escape_reach, settings.escape.reach);
     if let Some(v) = s.escape_seed {
         settings.escape.seed = v;
+    }
+    if let Some(v) = s.escape_searches {
+        settings.escape.searches = v;
     }
 
     let setpoints = match file.output.and_then(|o| o.setpoints) {

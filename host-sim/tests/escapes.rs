@@ -81,7 +81,10 @@ fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
             "walk at step {step} to the {side} side of \"post\"",
         ),
     ] {
-        let out = run(dir.path(), name, &scenario(name, half_height));
+        // Walks and detours alone (a search would come first: its own test
+        // is in tests/scenarios.rs).
+        let text = format!("{}escape_searches = 0\n", scenario(name, half_height));
+        let out = run(dir.path(), name, &text);
         let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
         eprintln!("{summary}");
         assert!(summary.contains("outcome:           reached"), "{summary}");
@@ -165,9 +168,17 @@ fn a_run_that_spends_its_attempts_says_so_in_a_few_lines() {
     let result = plan::run(&problem, &scenario, |_| {}).unwrap();
     let attempts = problem.settings.escape.attempts as usize;
     let stretches = escapes::of_rows(&result.rows);
+    // Every attempt walks or detours, some after a search.
     assert_eq!(
-        stretches.iter().filter(|s| s.kind != Kind::Return).count(),
+        stretches
+            .iter()
+            .filter(|s| s.kind != Kind::Return && s.kind != Kind::Search)
+            .count(),
         attempts
+    );
+    assert_eq!(
+        stretches.iter().filter(|s| s.kind == Kind::Search).count(),
+        problem.settings.escape.searches as usize
     );
     assert_eq!(stretches.last().map(|s| s.kind), Some(Kind::Return));
     let text = Summary::new(&problem, &result).to_string();

@@ -91,6 +91,62 @@ fn pips_escape_reaches_by_a_detour_and_stalls_without_escapes() {
     assert!(last.position_error > 1.0, "{}", last.position_error);
 }
 
+/// The search (`capp_core::tree`) on a dead end two detours do not pass:
+/// the arm holds still while it runs (every searching row repeats the
+/// configuration, with no time step), then walks the path it found and the
+/// law finishes; the checker accepts the whole run. Without searches the
+/// same dead end takes ten times the motion.
+#[test]
+fn planar_search_reaches_by_a_searched_path() {
+    use capp_core::escape::EscapeState;
+    let (problem, result) = plan("planar_search.toml");
+    assert_eq!(result.outcome, Outcome::Reached);
+    let searching = |e: &Option<EscapeState>| matches!(e, Some(EscapeState::Searching { .. }));
+    let following = |e: &Option<EscapeState>| matches!(e, Some(EscapeState::Following { .. }));
+    let rows = &result.rows;
+    let first = rows
+        .iter()
+        .position(|r| searching(&r.escape))
+        .expect("a search");
+    // A row records the state after its step: the steps after a searching
+    // row hold the arm still until the search ends.
+    let mut held = 0;
+    for w in rows[first..].windows(2) {
+        if !searching(&w[0].escape) {
+            break;
+        }
+        assert_eq!(w[1].h, 0.0, "step {}", w[1].step);
+        assert_eq!(w[1].q, w[0].q, "step {}", w[1].step);
+        held += 1;
+    }
+    assert!(held > 0);
+    let path = rows.iter().filter(|r| following(&r.escape)).count();
+    assert!(path > 5, "{path} rows along the searched path");
+    let moved: f32 = rows
+        .iter()
+        .skip_while(|r| !following(&r.escape))
+        .take_while(|r| following(&r.escape))
+        .map(|r| r.h)
+        .sum();
+    assert!(moved > 0.0);
+    let t = as_trajectory(&problem, &result);
+    let report = check::check(&problem, &t);
+    assert!(report.accepted() && report.reaches_target, "{report}");
+
+    let mut without = problem.clone();
+    without.settings.escape.searches = 0;
+    let s = without.validate().unwrap();
+    let walked = plan::run(&without, &s, |_| {}).unwrap();
+    let time = |r: &RunResult| r.rows.iter().map(|r| r.h as f64).sum::<f64>();
+    assert!(
+        walked.outcome != Outcome::Reached || time(&walked) > 3.0 * time(&result),
+        "{:?} in {} s without searches, {} s with",
+        walked.outcome,
+        time(&walked),
+        time(&result)
+    );
+}
+
 #[test]
 fn planar_arm_reaches() {
     runs_and_checks("planar_arm.toml", Outcome::Reached);

@@ -272,7 +272,7 @@ impl<const N: usize> Escape<N> {
         memory.fill(DeadEnd::default());
         *remembered = 0;
         *next_slot = 0;
-        *search = Search::default();
+        search.clear();
         *searches = 0;
         path.fill(0);
         *path_len = 0;
@@ -537,9 +537,7 @@ impl<const N: usize> Escape<N> {
             EscapeState::Detouring { .. } => (settings.walk_steps, settings.window),
             _ => (settings.walk_steps, WALK_PATIENCE),
         };
-        if gap <= reached
-            && matches!(self.state, EscapeState::Following { .. })
-            && self.next_node()
+        if gap <= reached && matches!(self.state, EscapeState::Following { .. }) && self.next_node()
         {
             return false;
         }

@@ -114,11 +114,18 @@ impl<const N: usize> Default for Search<N> {
 }
 
 impl<const N: usize> Search<N> {
+    /// [`Search::default`] in place.
+    pub fn clear(&mut self) {
+        self.tree.clear();
+        self.begin(&[], f32::INFINITY);
+        self.tree.clear();
+    }
+
     /// A new search from the dead end `root` (value `v`).
     pub fn begin(&mut self, root: &[f32], v: f32) {
         self.tree.plant(root, v);
-        self.goal = [0.0; N];
-        self.probe = [0.0; N];
+        self.goal.fill(0.0);
+        self.probe.fill(0.0);
         self.stage = Stage::Goal;
         self.probing = false;
         self.probe_steps = 0;
@@ -151,6 +158,17 @@ impl<const N: usize> Default for Tree<N> {
 }
 
 impl<const N: usize> Tree<N> {
+    /// [`Tree::default`] in place (a tree is kilobytes: never a temporary
+    /// on a board's stack).
+    pub fn clear(&mut self) {
+        for q in self.q.iter_mut() {
+            q.fill(0.0);
+        }
+        self.parent.fill(0);
+        self.v.fill(f32::INFINITY);
+        self.len = 0;
+    }
+
     /// Empties the tree and plants `root` (value `v`).
     pub fn plant(&mut self, root: &[f32], v: f32) {
         self.len = 0;

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 03 00 01, CRC-32 0x8a0057dd (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 04 00 01, CRC-32 0x8f4f4158 (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x03, 0x04, 0x01, 0xdd, 0x57, 0x02, 0x8a, 0x00]
+        &[0x02, 0x04, 0x06, 0x01, 0x58, 0x41, 0x4f, 0x8f, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x03, 0x01, 0x08, 0x38, 0xde, 0xc7, 0xea, 0x00]
+        &[0x08, 0x04, 0x01, 0x08, 0xbd, 0xc8, 0x88, 0xef, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x03, 0x02, 0xff, 0x01, 0xff, 0x67, 0xaf, 0x0a, 0xa1, 0x00]
+        &[0x0a, 0x04, 0x02, 0xff, 0x01, 0xff, 0x77, 0x73, 0x2a, 0x13, 0x00]
     );
 }
 
@@ -185,6 +185,7 @@ fn every_command_is_pinned() {
         escape_walk_steps: 200,
         escape_reach: 0.5,
         escape_seed: 0x2545_F491,
+        escape_searches: 4,
     };
     check(
         &Command::Settings(settings),
@@ -214,6 +215,7 @@ fn every_command_is_pinned() {
             0xC8, 0x01, // escape_walk_steps 200
             0x00, 0x00, 0x00, 0x3F, // 0.5
             0x91, 0xE9, 0x97, 0xAA, 0x02, // 0x2545F491
+            0x04, // escape_searches 4
         ],
     );
     #[cfg(feature = "core")]
@@ -269,7 +271,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x03, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x04, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -350,6 +352,27 @@ fn every_reply_is_pinned() {
             &[0x02, 0x03],
         ]),
     );
+    // The escape modes of version 4: searching (4) and following (5).
+    for (mode, tag) in [(EscapeMode::Searching, 0x04), (EscapeMode::Following, 0x05)] {
+        let s = Status {
+            escape: mode,
+            ..status
+        };
+        check(
+            &Reply::Status(s),
+            &cat(&[
+                &[0x04, 0x02, 0x01, 0x01, 0xAC, 0x02],
+                &HALF,
+                &ONE,
+                &TWO,
+                &[0x01],
+                &MINUS_ONE,
+                &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
+                &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
+                &[tag, 0x03],
+            ]),
+        );
+    }
     let idle = Status {
         state: State::Idle,
         outcome: None,

@@ -30,9 +30,7 @@ use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
 use crate::control::damped::damped_rate;
 use crate::control::first_order::first_order_rate;
 use crate::control::joint_space::{gap, joint_rate, joint_v};
-use crate::control::{
-    pose_error, Drive, LawKind, LawWorkspace, PoseError, Target,
-};
+use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
 use crate::escape::{Escape, EscapeState};
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{all_finite, norm};
@@ -49,7 +47,6 @@ mod search;
 /// inflated surface (where `f32` rounding decides contact) instead of
 /// creeping onto it in ever smaller steps.
 pub const CONTACT_FLOOR: f32 = 0.01;
-
 
 /// Pose error, as a fraction of the robot's reach, below which a stall is
 /// `f32` rounding, not a dead end: no escape is tried.

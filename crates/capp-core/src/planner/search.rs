@@ -189,7 +189,10 @@ impl<const N: usize> Planner<N> {
                 } else {
                     self.draw_configuration(n, robot);
                 }
-                self.escape.search_mut().tree.nearest(robot, &self.q_next[..n])
+                self.escape
+                    .search_mut()
+                    .tree
+                    .nearest(robot, &self.q_next[..n])
             }
         };
         let qa = *self.escape.search_mut().tree.node(a);
@@ -295,7 +298,7 @@ impl<const N: usize> Planner<N> {
             edge_s,
             settings.avoidance.advance_fraction,
         );
-        if !(h > 0.0) {
+        if h.is_nan() || h <= 0.0 {
             return 0.0;
         }
         for (j, joint) in robot.joints().iter().enumerate().take(n) {
