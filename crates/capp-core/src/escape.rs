@@ -329,10 +329,11 @@ impl<const N: usize> Escape<N> {
         &mut self.search
     }
 
-    /// The search found a path to its node `end`: walk it, node by node.
-    pub fn follow(&mut self, end: usize) {
+    /// The search found its path ([`Search::path`]): walk it, node by node.
+    pub fn follow(&mut self) {
         if let EscapeState::Searching { attempt, side } = self.state {
-            let len = self.search.tree.path(end, &mut self.path);
+            let len = self.search.path().len();
+            self.path[..len].copy_from_slice(self.search.path());
             self.start_walk(EscapeState::Following { attempt, side });
             self.path_len = len as u8;
             self.path_at = 0;

@@ -23,6 +23,10 @@
 //!    the contact floor or no closer than where they come from). At most
 //!    [`EXTENSIONS`] extensions and [`TREE_NODES`] nodes; the search ends at
 //!    the first node within one edge of the goal configuration.
+//! 4. **Shortcut**: the path is shortened greedily, as sampling planners
+//!    do: from each node, the farthest later node a straight segment
+//!    reaches, checked at the edges' spacing, at most [`SHORTCUT_CHECKS`]
+//!    configurations in all.
 //!
 //! The tree is a plan: the walk along its path checks every one of its
 //! steps like any other step (conservative advancement, evaluation,
@@ -52,6 +56,9 @@ pub const GOAL_BIAS: f32 = 0.3;
 pub const EDGE_STEPS: f32 = 10.0;
 /// Configurations checked along an edge.
 pub const EDGE_CHECKS: usize = 5;
+/// Most configurations checked while shortening a path; the rest of the
+/// path is kept as found.
+pub const SHORTCUT_CHECKS: u16 = 256;
 /// Evaluations of the arm (kinematics, pose error, potential) a planner
 /// step may spend on the search: the search's cost per step, about what a
 /// step with its halvings costs.
@@ -66,6 +73,8 @@ pub enum Stage {
     Trunk,
     /// Growing the tree toward the goal configuration.
     Grow,
+    /// Shortening the path found: straight segments across its nodes.
+    Shortcut,
 }
 
 /// A search's fixed-size state.
@@ -93,6 +102,22 @@ pub struct Search<const N: usize> {
     pub extensions: u16,
     /// The node a greedy connection carries on from.
     pub connecting: Option<u8>,
+    /// The path found (node indices, root first), shortened in place.
+    pub path: [u8; TREE_NODES],
+    /// Its length.
+    pub path_len: u8,
+    /// Shortcut: the path position the segment starts from, the one it
+    /// tries to reach, the next position to write, the configuration of the
+    /// segment to check next, and the checks spent.
+    pub from: u8,
+    /// See `from`.
+    pub to: u8,
+    /// See `from`.
+    pub out: u8,
+    /// See `from`.
+    pub check: u16,
+    /// See `from`.
+    pub shortcut_checks: u16,
 }
 
 impl<const N: usize> Default for Search<N> {
@@ -109,6 +134,13 @@ impl<const N: usize> Default for Search<N> {
             base: 0,
             extensions: 0,
             connecting: None,
+            path: [0; TREE_NODES],
+            path_len: 0,
+            from: 0,
+            to: 0,
+            out: 0,
+            check: 0,
+            shortcut_checks: 0,
         }
     }
 }
@@ -134,6 +166,28 @@ impl<const N: usize> Search<N> {
         self.base = 0;
         self.extensions = 0;
         self.connecting = None;
+        self.path.fill(0);
+        self.path_len = 0;
+        self.from = 0;
+        self.to = 0;
+        self.out = 0;
+        self.check = 0;
+        self.shortcut_checks = 0;
+    }
+
+    /// The path to node `end` is found: shorten it next.
+    pub fn found(&mut self, end: usize) {
+        self.path_len = self.tree.path(end, &mut self.path) as u8;
+        self.stage = Stage::Shortcut;
+        self.from = 0;
+        self.out = 1;
+        self.to = self.path_len.saturating_sub(1);
+        self.check = 1;
+    }
+
+    /// The path, shortened.
+    pub fn path(&self) -> &[u8] {
+        &self.path[..(self.path_len as usize).min(TREE_NODES)]
     }
 }
 
@@ -260,7 +314,61 @@ impl<const N: usize> Tree<N> {
             }
             i = self.parent.get(i).copied().unwrap_or(0) as usize;
         }
-        path[..len].reverse();
+        if let Some(p) = path.get_mut(..len) {
+            p.reverse();
+        }
         len
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::{Joint, Robot};
+
+    fn robot() -> Robot<3> {
+        let joint = |max_rate| Joint::revolute(0.0, 1.0, 0.0, -3.0, 3.0, max_rate);
+        Robot::new(&[joint(1.0), joint(2.0), joint(0.5)]).unwrap()
+    }
+
+    #[test]
+    fn a_path_runs_from_the_root_through_the_parents() {
+        let mut t = Tree::<3>::default();
+        t.plant(&[0.0; 3], 4.0);
+        let a = t.push(&[1.0, 0.0, 0.0], 0, 3.0).unwrap();
+        let b = t.push(&[0.0, 1.0, 0.0], 0, 5.0).unwrap();
+        let c = t.push(&[2.0, 0.0, 0.0], a, 1.0).unwrap();
+        let mut path = [0u8; TREE_NODES];
+        let len = t.path(c, &mut path);
+        assert_eq!(&path[..len], &[0, a as u8, c as u8]);
+        assert_eq!(t.path(b, &mut path), 2);
+        assert_eq!(t.path(0, &mut path), 1);
+        assert_eq!(t.lowest(), c);
+        // Seconds at the rate limits: joint 2 (0.5 rad/s) counts four times joint 1.
+        let r = robot();
+        assert_eq!(t.nearest(&r, &[0.0, 0.0, 0.3]), 0);
+        assert_eq!(t.nearest(&r, &[1.9, 0.0, 0.0]), c);
+        assert_eq!(t.nearest(&r, &[0.1, 1.5, 0.0]), b);
+    }
+
+    #[test]
+    fn a_full_tree_refuses_more_and_clears_in_place() {
+        let mut t = Tree::<3>::default();
+        t.plant(&[0.0; 3], 1.0);
+        for i in 1..TREE_NODES {
+            assert_eq!(t.push(&[i as f32, 0.0, 0.0], i - 1, 1.0), Some(i));
+        }
+        assert!(t.is_full());
+        assert_eq!(t.push(&[0.0; 3], 0, 0.0), None);
+        let mut path = [0u8; TREE_NODES];
+        assert_eq!(t.path(TREE_NODES - 1, &mut path), TREE_NODES);
+        t.clear();
+        assert!(t.is_empty());
+        let mut s = Search::<3>::default();
+        s.begin(&[1.0, 2.0, 3.0], 2.0);
+        s.found(0);
+        assert_eq!(s.path(), &[0]);
+        s.clear();
+        assert!(s.tree.is_empty() && s.path().is_empty());
     }
 }

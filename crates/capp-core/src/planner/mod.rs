@@ -673,7 +673,7 @@ impl<const N: usize> Planner<N> {
         if matches!(self.escape.state(), EscapeState::Searching { .. }) {
             match self.search_slice(scenario, &target) {
                 search::Slice::Working => {}
-                search::Slice::Found(node) => self.escape.follow(node),
+                search::Slice::Found => self.escape.follow(),
                 search::Slice::Failed => self.escape.search_failed(),
             }
             self.step += 1;

@@ -14,7 +14,7 @@ use crate::scenario::Scenario;
 use crate::step_size::advancement;
 use crate::tree::{
     Stage, DESCENTS, DESCENT_STEPS, EDGE_CHECKS, EDGE_STEPS, EXTENSIONS, GOAL_BIAS, GOAL_NEAR,
-    SEARCH_EVALUATIONS, TRUNK_STEPS,
+    SEARCH_EVALUATIONS, SHORTCUT_CHECKS, TREE_NODES, TRUNK_STEPS,
 };
 
 /// What a slice of the search came to.
@@ -22,8 +22,8 @@ use crate::tree::{
 pub(super) enum Slice {
     /// Not done yet.
     Working,
-    /// A path to this node of the tree.
-    Found(usize),
+    /// A path ([`crate::tree::Search::path`]).
+    Found,
     /// The budget is spent, no path.
     Failed,
 }
@@ -41,6 +41,7 @@ impl<const N: usize> Planner<N> {
                 Stage::Goal => self.goal_unit(scenario, target, &mut spent),
                 Stage::Trunk => self.trunk_unit(scenario, target, &mut spent),
                 Stage::Grow => self.grow_unit(scenario, target, &mut spent),
+                Stage::Shortcut => self.shortcut_unit(scenario, target, &mut spent),
             };
             if slice != Slice::Working {
                 return slice;
@@ -234,7 +235,68 @@ impl<const N: usize> Planner<N> {
             search.connecting = Some(i as u8);
         }
         if gap(robot, &self.q_next[..n], &goal[..n]) <= edge_s {
-            return Slice::Found(i);
+            search.found(i);
+        }
+        Slice::Working
+    }
+
+    /// One configuration of the shortcut being checked: the segment from
+    /// path position `from` to `to`, at the spacing of an edge's checks.
+    fn shortcut_unit<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+        spent: &mut u16,
+    ) -> Slice {
+        let (settings, robot) = (scenario.settings(), scenario.robot());
+        let n = self.n.min(N);
+        let spacing = EDGE_STEPS * settings.time_step_s / EDGE_CHECKS as f32;
+        let search = self.escape.search_mut();
+        let len = search.path_len as usize;
+        let (from, to) = (search.from as usize, search.to as usize);
+        if from + 1 >= len {
+            search.path_len = search.out;
+            return Slice::Found;
+        }
+        let node = |s: &crate::tree::Search<N>, k: usize| {
+            *s.tree.node(s.path.get(k).copied().unwrap_or(0) as usize)
+        };
+        let (a, b) = (node(search, from), node(search, to));
+        let checks = libm::ceilf(gap(robot, &a[..n], &b[..n]) / spacing) as u16;
+        // A tree edge is already checked; a spent budget keeps the rest.
+        let keep = to == from + 1 || search.shortcut_checks >= SHORTCUT_CHECKS;
+        let mut accept = keep;
+        if !keep {
+            let k = search.check;
+            search.shortcut_checks += 1;
+            let s = k as f32 / checks.max(1) as f32;
+            for j in 0..n {
+                self.q_next[j] = a[j] + s * (b[j] - a[j]);
+            }
+            *spent += 1;
+            let clear = self.imagine_accept(scenario, target, f32::INFINITY);
+            let search = self.escape.search_mut();
+            if !clear {
+                search.to -= 1;
+                search.check = 1;
+                return Slice::Working;
+            }
+            if k < checks {
+                search.check = k + 1;
+                return Slice::Working;
+            }
+            accept = true;
+        }
+        let search = self.escape.search_mut();
+        if accept {
+            let (out, next) = (search.out as usize, if keep { from + 1 } else { to });
+            if let (Some(&v), true) = (search.path.get(next), out < TREE_NODES) {
+                search.path[out] = v;
+            }
+            search.out += 1;
+            search.from = next as u8;
+            search.to = (len - 1) as u8;
+            search.check = 1;
         }
         Slice::Working
     }
@@ -301,8 +363,9 @@ impl<const N: usize> Planner<N> {
         if h.is_nan() || h <= 0.0 {
             return 0.0;
         }
-        for (j, joint) in robot.joints().iter().enumerate().take(n) {
-            self.q_next[j] = joint.clamp(qa[j] + h * self.rate[j]);
+        let moves = qa.iter().zip(&self.rate).zip(robot.joints()).take(n);
+        for (next, ((&a, &r), joint)) in self.q_next.iter_mut().zip(moves) {
+            *next = joint.clamp(a + h * r);
         }
         h
     }
