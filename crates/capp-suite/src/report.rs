@@ -424,9 +424,11 @@ pub fn markdown_with_figures(
     s.push_str(
         "\n## Dead-end escapes\n\n\
          When the law stops making progress short of the target, the planner escapes \
-         (`capp-core`'s `escape`): detours send the end effector round the blocking obstacle, \
-         random walks move the joints away from the dead end, up to the scenario's attempts per \
-         waypoint; then it walks back to the best configuration and ends `stalled` (*ended by the \
+         (`capp-core`'s `escape`): detours send the end effector round the blocking obstacle; \
+         then a search (`capp-core`'s `tree`, the first attempts of a waypoint, the arm holding \
+         still) looks for a goal configuration and a tree to it and walks its path (*searched \
+         paths*), or random walks move the joints away from the dead end; up to the scenario's \
+         attempts per waypoint; then it walks back to the best configuration and ends `stalled` (*ended by the \
          return*). Counted from the planner's step reports (the trajectory's `escape` column). \
          *Escaped*: runs with at least one attempt; attempts and motion times are over the \
          escaped runs that reached, the motion time and the RRT comparison over those whose case \
