@@ -578,7 +578,7 @@ pub fn tables(
             );
             let _ = writeln!(
                 w,
-                "| static RAM: `.data + .bss + .uninit` | {} | {} | <= 32 768 (32 KiB) |",
+                "| static RAM: `.data + .bss + .uninit` | {} | {} | <= 98 304 (96 KiB; 32 KiB before the search tree) |",
                 grouped(f.mps2.static_ram as f64),
                 grouped(f.f446.static_ram as f64)
             );
