@@ -22,7 +22,12 @@
 //!    which is what a user is judged on; clearance is the projection's job).
 //!    The law drives there as to any target (position only), for at most
 //!    [`EscapeSettings::walk_steps`] steps, then turns back to the target.
-//! 3. **Walk** (once the detours are spent, or with no such obstacle):
+//! 3. **Search** (the first [`EscapeSettings::searches`] attempts of a
+//!    waypoint that would walk): the arm holds still while a search in
+//!    imagination ([`crate::tree`]) looks for a goal configuration and a
+//!    tree to it; a path found is walked node by node
+//!    ([`EscapeState::Following`]), else the walk below is.
+//! 4. **Walk** (once the detours are spent, or with no such obstacle):
 //!    [`CANDIDATES`] random joint configurations around the current one, each
 //!    joint moved by up to `reach` (growing with the visits) of its range; a
 //!    candidate that would approach the obstacles (`mu . dq > 0`) is mirrored
@@ -31,7 +36,7 @@
 //!    ([`crate::control::joint_space`]), every step checked like any other,
 //!    for at most [`EscapeSettings::walk_steps`] steps or until it is reached
 //!    or blocked.
-//! 4. **Descend** again with the law. Progress below the best `V` carries on
+//! 5. **Descend** again with the law. Progress below the best `V` carries on
 //!    as normal; the next stall starts the next attempt.
 //!
 //! Either way the report names the side of the blocking obstacle taken.
