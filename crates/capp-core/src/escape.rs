@@ -53,7 +53,7 @@ use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{max, min, norm, Vec3};
 use crate::obstacle::Obstacle;
 use crate::robot::{JointKind, Robot};
-use crate::tree::{Search, TREE_NODES};
+use crate::tree::Search;
 
 /// Dead ends remembered per waypoint (a ring: the oldest is forgotten).
 pub const MEMORY: usize = 8;
@@ -198,12 +198,10 @@ pub struct Escape<const N: usize> {
     memory: [DeadEnd; MEMORY],
     remembered: u8,
     next_slot: u8,
-    /// The search of the current attempt, and the path the walk follows
-    /// through its tree (node indices, root first; empty for a plain walk).
+    /// The search of the current attempt, and where the walk along its
+    /// path is (a position in [`Search::path`]).
     search: Search<N>,
     searches: u8,
-    path: [u8; TREE_NODES],
-    path_len: u8,
     path_at: u8,
 }
 
@@ -226,8 +224,6 @@ impl<const N: usize> Escape<N> {
             next_slot: 0,
             search: Search::default(),
             searches: 0,
-            path: [0; TREE_NODES],
-            path_len: 0,
             path_at: 0,
         };
         escape.reset(seed, start);
@@ -252,8 +248,6 @@ impl<const N: usize> Escape<N> {
             next_slot,
             search,
             searches,
-            path,
-            path_len,
             path_at,
         } = self;
         // FNV-1a over the start's bits, then the seed; never zero (xorshift).
@@ -279,8 +273,6 @@ impl<const N: usize> Escape<N> {
         *next_slot = 0;
         search.clear();
         *searches = 0;
-        path.fill(0);
-        *path_len = 0;
         *path_at = 0;
     }
 
@@ -291,7 +283,6 @@ impl<const N: usize> Escape<N> {
         self.remembered = 0;
         self.next_slot = 0;
         self.searches = 0;
-        self.path_len = 0;
         self.best_v = v;
         let len = q.len().min(N);
         self.best_q[..len].copy_from_slice(&q[..len]);
@@ -337,10 +328,7 @@ impl<const N: usize> Escape<N> {
     /// The search found its path ([`Search::path`]): walk it, node by node.
     pub fn follow(&mut self) {
         if let EscapeState::Searching { attempt, side } = self.state {
-            let len = self.search.path().len();
-            self.path[..len].copy_from_slice(self.search.path());
             self.start_walk(EscapeState::Following { attempt, side });
-            self.path_len = len as u8;
             self.path_at = 0;
             self.next_node();
         }
@@ -356,8 +344,8 @@ impl<const N: usize> Escape<N> {
     /// On to the next node of the path, if there is one.
     fn next_node(&mut self) -> bool {
         let next = self.path_at as usize + 1;
-        match self.path.get(next) {
-            Some(&i) if next < self.path_len as usize => {
+        match self.search.path().get(next) {
+            Some(&i) => {
                 self.path_at = next as u8;
                 self.goal = *self.search.tree.node(i as usize);
                 self.walked = 0;
@@ -515,7 +503,6 @@ impl<const N: usize> Escape<N> {
 
     fn start_walk(&mut self, state: EscapeState) {
         self.state = state;
-        self.path_len = 0;
         self.walked = 0;
         self.idle = 0;
         self.closest = f32::INFINITY;
@@ -549,7 +536,6 @@ impl<const N: usize> Escape<N> {
         }
         let over = gap <= reached || self.idle >= patience || self.walked >= limit;
         if over {
-            self.path_len = 0;
             match self.state {
                 EscapeState::Walking { attempt, .. }
                 | EscapeState::Following { attempt, .. }

@@ -66,7 +66,25 @@ pub struct Guard<'a> {
     pub approach: f32,
 }
 
-impl Guard<'_> {
+impl<'a> Guard<'a> {
+    /// The guard of a configuration with obstacle gradient `gradient` whose
+    /// closest pair is at `clearance` (`C - 1`): [`strength`], [`retreat`]
+    /// and [`approach`] for the projection engaged below `engage` and the
+    /// final approach stopping at `contact_floor` of it.
+    pub fn at(
+        gradient: &'a [f32],
+        clearance: Option<f32>,
+        engage: f32,
+        contact_floor: f32,
+    ) -> Self {
+        Guard {
+            gradient,
+            strength: strength(clearance, engage),
+            retreat: retreat(clearance, engage),
+            approach: approach(clearance, engage, contact_floor),
+        }
+    }
+
     /// The most `gradient . dq` may be for a step whose unprojected value is
     /// `approach`, or `None` when the step needs no projection: travelling,
     /// `(1 - strength) max(approach, 0) - retreat`; on the final approach,

@@ -149,13 +149,17 @@ impl<const N: usize> Search<N> {
     /// [`Search::default`] in place.
     pub fn clear(&mut self) {
         self.tree.clear();
-        self.begin(&[], f32::INFINITY);
-        self.tree.clear();
+        self.restart();
     }
 
     /// A new search from the dead end `root` (value `v`).
     pub fn begin(&mut self, root: &[f32], v: f32) {
         self.tree.plant(root, v);
+        self.restart();
+    }
+
+    /// Everything but the tree back to its initial value.
+    fn restart(&mut self) {
         self.goal.fill(0.0);
         self.probe.fill(0.0);
         self.stage = Stage::Goal;

@@ -35,7 +35,7 @@ use crate::escape::{Escape, EscapeState};
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{all_finite, norm};
 use crate::mission::Settings;
-use crate::projection::{approach, retreat, strength, Guard};
+use crate::projection::{strength, Guard};
 use crate::robot::Robot;
 use crate::scenario::Scenario;
 use crate::step_size::advancement;
@@ -228,6 +228,19 @@ impl<const N: usize> Evaluation<N> {
         mu.fill(0.0);
         distance_sq.fill(0.0);
         *field = ObstacleField::default();
+    }
+
+    /// `C - 1` of the closest pair within influence (infinity: none).
+    fn closest(&self) -> f32 {
+        self.field.clearance.map_or(f32::INFINITY, |c| c.value)
+    }
+
+    /// Whether a step may end here, coming from a configuration whose
+    /// closest pair was at `c_from`: every point clear, and not creeping onto
+    /// a surface (below `floor` the closest clearance may not shrink).
+    fn safe_after(&self, c_from: f32, floor: f32) -> bool {
+        let c = self.closest();
+        self.field.clear && (c >= floor || c >= c_from)
     }
 
     fn evaluate<const M: usize, const W: usize>(
@@ -702,17 +715,12 @@ impl<const N: usize> Planner<N> {
             // switching): fresh buffers for it.
             self.law.reset(settings.law.kind);
         }
-        let clearance = self.now.field.clearance.map(|c| c.value);
-        let guard = Guard {
-            gradient: &self.now.mu[..n],
-            strength: engage,
-            retreat: retreat(clearance, settings.avoidance.engage_clearance),
-            approach: approach(
-                clearance,
-                settings.avoidance.engage_clearance,
-                CONTACT_FLOOR,
-            ),
-        };
+        let guard = Guard::at(
+            &self.now.mu[..n],
+            self.now.field.clearance.map(|c| c.value),
+            settings.avoidance.engage_clearance,
+            CONTACT_FLOOR,
+        );
         let walking = self.escape.goal().is_some();
         let escaping = walking || detour.is_some();
         // Straight in joint space: an escape walk, or a joint goal.
@@ -801,13 +809,8 @@ impl<const N: usize> Planner<N> {
                 }
                 self.next
                     .evaluate(scenario, &self.q_next[..n], &drive_target);
-                // Clear, and not creeping onto a surface: below the contact
-                // floor the closest clearance may not shrink further.
-                let closest =
-                    |e: &Evaluation<N>| e.field.clearance.map_or(f32::INFINITY, |c| c.value);
-                let (c_next, c_now) = (closest(&self.next), closest(&self.now));
                 let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
-                let safe = self.next.field.clear && (c_next >= floor || c_next >= c_now);
+                let safe = self.next.safe_after(self.now.closest(), floor);
                 // A walk may climb V: it is leaving a dead end.
                 let descends = constrained || walking || self.next.error.v <= self.now.error.v;
                 if safe && descends && all_finite(&self.q_next[..n]) {

@@ -9,7 +9,7 @@ use crate::control::damped::damped_rate;
 use crate::control::joint_space::gap;
 use crate::control::{time_at_limits, LawWorkspace, Target};
 use crate::math::all_finite;
-use crate::projection::{approach, retreat, strength, Guard};
+use crate::projection::Guard;
 use crate::scenario::Scenario;
 use crate::step_size::advancement;
 use crate::tree::{
@@ -99,7 +99,7 @@ impl<const N: usize> Planner<N> {
         }
         search.probe_steps += 1;
         let probe = search.probe;
-        let c = self.next.field.clearance.map_or(f32::INFINITY, |c| c.value);
+        let c = self.next.closest();
         *spent += 1;
         let taken = self.imagine_law_step(scenario, &probe[..n], edge_s) > 0.0
             && self.imagine_accept(scenario, target, c)
@@ -133,7 +133,7 @@ impl<const N: usize> Planner<N> {
         let qa = *search.tree.node(base);
         self.next.evaluate(scenario, &qa[..n], target);
         *spent += 2;
-        let c_a = self.next.field.clearance.map_or(f32::INFINITY, |c| c.value);
+        let c_a = self.next.closest();
         let mut leave = c_a >= settings.avoidance.engage_clearance;
         if !leave {
             // Down the potential in the metric of the rate limits.
@@ -209,7 +209,7 @@ impl<const N: usize> Planner<N> {
         // motion (the walk along it checks each of its steps).
         self.next.evaluate(scenario, &qa[..n], target);
         *spent += 1;
-        let mut c_from = self.next.field.clearance.map_or(f32::INFINITY, |c| c.value);
+        let mut c_from = self.next.closest();
         let mut clear = all_finite(&self.rate[..n]);
         for k in 1..=EDGE_CHECKS {
             if !clear {
@@ -221,7 +221,7 @@ impl<const N: usize> Planner<N> {
             }
             *spent += 1;
             clear = self.imagine_accept(scenario, target, c_from);
-            c_from = self.next.field.clearance.map_or(f32::INFINITY, |c| c.value);
+            c_from = self.next.closest();
         }
         let search = self.escape.search_mut();
         if !clear {
@@ -316,14 +316,12 @@ impl<const N: usize> Planner<N> {
         let LawWorkspace::Damped(ws) = &mut self.law else {
             return 0.0;
         };
-        let clearance = self.next.field.clearance.map(|c| c.value);
-        let engage = settings.avoidance.engage_clearance;
-        let guard = Guard {
-            gradient: &self.next.mu[..n],
-            strength: strength(clearance, engage),
-            retreat: retreat(clearance, engage),
-            approach: approach(clearance, engage, CONTACT_FLOOR),
-        };
+        let guard = Guard::at(
+            &self.next.mu[..n],
+            self.next.field.clearance.map(|c| c.value),
+            settings.avoidance.engage_clearance,
+            CONTACT_FLOOR,
+        );
         damped_rate(
             robot,
             &self.next.frames,
@@ -383,7 +381,6 @@ impl<const N: usize> Planner<N> {
         let q = self.q_next;
         self.next.evaluate(scenario, &q[..n], target);
         let floor = CONTACT_FLOOR * scenario.settings().avoidance.engage_clearance;
-        let c = self.next.field.clearance.map_or(f32::INFINITY, |c| c.value);
-        self.next.field.clear && (c >= floor || c >= c_from) && all_finite(&q[..n])
+        self.next.safe_after(c_from, floor) && all_finite(&q[..n])
     }
 }
