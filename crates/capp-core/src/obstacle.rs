@@ -258,24 +258,76 @@ pub struct Contact {
     pub distance_sq: f32,
 }
 
-/// A validated obstacle with everything a step needs precomputed.
+/// An obstacle's exponents, sorted once into the patterns the pair code runs
+/// straight through (one dispatch a pair, not one an axis) and the general case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Powers {
+    /// Exponent 2 on every axis (an ellipsoid).
+    Same2,
+    /// Exponent 4 on every axis.
+    Same4,
+    /// Exponent 8 on every axis (nearly a box).
+    Same8,
+    /// Exponent 8 along x, 2 across it: a round cylinder with flat ends.
+    CylinderX,
+    /// Exponent 8 along y, 2 across it.
+    CylinderY,
+    /// Exponent 8 along z, 2 across it.
+    CylinderZ,
+    /// Anything else: each axis by its own [`Exponent`].
+    Axes,
+}
+
+impl Powers {
+    fn new(k: [f32; 3]) -> Self {
+        match k {
+            [2.0, 2.0, 2.0] => Powers::Same2,
+            [4.0, 4.0, 4.0] => Powers::Same4,
+            [8.0, 8.0, 8.0] => Powers::Same8,
+            [8.0, 2.0, 2.0] => Powers::CylinderX,
+            [2.0, 8.0, 2.0] => Powers::CylinderY,
+            [2.0, 2.0, 8.0] => Powers::CylinderZ,
+            _ => Powers::Axes,
+        }
+    }
+}
+
+/// `(u^K, K u^(K-1))` for a constant integer `K >= 1`: the products of
+/// [`Exponent::power_and_slope`] for `Exponent::Integer(K)`, in its order.
+#[inline(always)]
+fn power_and_slope_of<const K: u8>(u: f32) -> (f32, f32) {
+    let lower = powi(u, K - 1);
+    (lower * u, K as f32 * lower)
+}
+
+/// What a point of one [`PointKind`] sees of an obstacle.
+#[derive(Clone, Copy, Debug)]
+struct Inflated {
+    /// Squared radius of the sphere around the influence box.
+    reach_sq: f32,
+    /// Half-extents of the influence box, `semi-axis + margin + influence`.
+    reach: Vec3,
+    /// `1 / (semi-axis + margin)`.
+    inv: Vec3,
+    /// `reach - influence` (the inflated semi-axes, as the box bound has
+    /// always computed them).
+    inner: Vec3,
+}
+
+/// A validated obstacle with everything a step needs precomputed. The fields
+/// a pair test reads come first.
 #[derive(Clone, Copy, Debug)]
 pub struct Obstacle {
-    source: SuperEllipsoid,
     centre: Vec3,
-    /// `R` (obstacle axes in world coordinates, as columns).
-    rotation: Mat3,
+    /// Per [`PointKind`].
+    inflated: [Inflated; 2],
     /// Whether `R` is the identity (no Euler angles): the rotations are skipped.
     aligned: bool,
+    powers: Powers,
     exponents: [Exponent; 3],
-    /// The influence distance the `reach` boxes were widened by.
-    influence: f32,
-    /// Per [`PointKind`]: `1 / (semi-axis + margin)`.
-    inv_axes: [Vec3; 2],
-    /// Per [`PointKind`]: half-extents of the influence box, `semi-axis + margin + influence`.
-    reach: [Vec3; 2],
-    /// Per [`PointKind`]: squared radius of the sphere around the influence box.
-    reach_sq: [f32; 2],
+    /// `R` (obstacle axes in world coordinates, as columns).
+    rotation: Mat3,
+    source: SuperEllipsoid,
 }
 
 impl Obstacle {
@@ -321,20 +373,24 @@ impl Obstacle {
         let [rx, ry, rz] = s.euler_123;
         let rotation = rotation_123(rx, ry, rz);
         let axes = vec3(s.semi_axes);
-        let inflate = |margin: f32| axes.add_scalar(margin);
-        let inv_axes = margins.map(|m| inflate(m).map(|x| 1.0 / x));
-        let reach = margins.map(|m| inflate(m).add_scalar(influence));
-        let reach_sq = reach.map(|r| r.dot(&r));
+        let inflated = margins.map(|m| {
+            let inflated = axes.add_scalar(m);
+            let reach = inflated.add_scalar(influence);
+            Inflated {
+                reach_sq: reach.dot(&reach),
+                reach,
+                inv: inflated.map(|x| 1.0 / x),
+                inner: reach.map(|r| r - influence),
+            }
+        });
         Ok(Obstacle {
-            source: *s,
             centre: vec3(s.centre),
-            rotation,
+            inflated,
             aligned: s.euler_123 == [0.0; 3],
+            powers: Powers::new(s.exponents),
             exponents: s.exponents.map(Exponent::new),
-            influence,
-            inv_axes,
-            reach,
-            reach_sq,
+            rotation,
+            source: *s,
         })
     }
 
@@ -360,10 +416,13 @@ impl Obstacle {
     // dozen instructions instead of a call.
     #[inline(always)]
     pub fn contact(&self, p: &Vec3, kind: PointKind) -> Option<Contact> {
-        let k = kind as usize;
+        let inflated = match kind {
+            PointKind::Joint => &self.inflated[0],
+            PointKind::Link => &self.inflated[1],
+        };
         let r = p - self.centre;
         // Cheap sphere test first: most pairs on a long arm end here.
-        if r.dot(&r) > self.reach_sq[k] {
+        if r.dot(&r) > inflated.reach_sq {
             return None;
         }
         // R^T r by the columns of R (no stored transpose: 36 bytes an obstacle).
@@ -372,31 +431,78 @@ impl Obstacle {
         } else {
             self.rotation.tr_mul(&r)
         };
-        let reach = &self.reach[k];
-        if x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z {
+        let reach = &inflated.reach;
+        let (ax, ay, az) = (x.x.abs(), x.y.abs(), x.z.abs());
+        if ax > reach.x || ay > reach.y || az > reach.z {
             return None;
         }
-        let inv = &self.inv_axes[k];
-        let mut c = 0.0;
-        let mut local_gradient = Vec3::zeros();
-        let mut box_sq = 0.0;
-        for axis in 0..3 {
-            let u = x[axis].abs() * inv[axis];
-            let (term, slope) = self.exponents[axis].power_and_slope(u);
-            c += term;
-            // d|x|/dx = sign(x); zero at x = 0 (the octahedron's kink).
-            let sign = if x[axis] > 0.0 {
+        let inv = &inflated.inv;
+        let (ux, uy, uz) = (ax * inv.x, ay * inv.y, az * inv.z);
+        let ((tx, sx), (ty, sy), (tz, sz)) = match self.powers {
+            Powers::Same2 => (
+                power_and_slope_of::<2>(ux),
+                power_and_slope_of::<2>(uy),
+                power_and_slope_of::<2>(uz),
+            ),
+            Powers::Same4 => (
+                power_and_slope_of::<4>(ux),
+                power_and_slope_of::<4>(uy),
+                power_and_slope_of::<4>(uz),
+            ),
+            Powers::Same8 => (
+                power_and_slope_of::<8>(ux),
+                power_and_slope_of::<8>(uy),
+                power_and_slope_of::<8>(uz),
+            ),
+            Powers::CylinderX => (
+                power_and_slope_of::<8>(ux),
+                power_and_slope_of::<2>(uy),
+                power_and_slope_of::<2>(uz),
+            ),
+            Powers::CylinderY => (
+                power_and_slope_of::<2>(ux),
+                power_and_slope_of::<8>(uy),
+                power_and_slope_of::<2>(uz),
+            ),
+            Powers::CylinderZ => (
+                power_and_slope_of::<2>(ux),
+                power_and_slope_of::<2>(uy),
+                power_and_slope_of::<8>(uz),
+            ),
+            Powers::Axes => {
+                let [ex, ey, ez] = self.exponents;
+                (
+                    ex.power_and_slope(ux),
+                    ey.power_and_slope(uy),
+                    ez.power_and_slope(uz),
+                )
+            }
+        };
+        // The sum from 0 in axis order, as the loop it replaces (0 + t = t:
+        // the terms are never -0).
+        let c = tx + ty + tz;
+        // d|x|/dx = sign(x); zero at x = 0 (the octahedron's kink).
+        let sign = |x: f32| {
+            if x > 0.0 {
                 1.0
-            } else if x[axis] < 0.0 {
+            } else if x < 0.0 {
                 -1.0
             } else {
                 0.0
-            };
-            local_gradient[axis] = slope * inv[axis] * sign;
-            // semi-axis + margin = reach - influence.
-            let outside = max(x[axis].abs() - (reach[axis] - self.influence), 0.0);
-            box_sq += outside * outside;
-        }
+            }
+        };
+        let local_gradient = Vec3::new(
+            sx * inv.x * sign(x.x),
+            sy * inv.y * sign(x.y),
+            sz * inv.z * sign(x.z),
+        );
+        let inner = &inflated.inner;
+        let (ox, oy, oz) = (
+            max(ax - inner.x, 0.0),
+            max(ay - inner.y, 0.0),
+            max(az - inner.z, 0.0),
+        );
+        let box_sq = ox * ox + oy * oy + oz * oz;
         if c > C_CUTOFF || c.is_nan() {
             return Some(Contact {
                 clearance: f32::INFINITY,
@@ -431,7 +537,7 @@ impl Obstacle {
     /// `C(p) - 1` with no influence cut-off (for reporting and checks; may be `inf`).
     pub fn clearance_uncut(&self, p: &Vec3, kind: PointKind) -> f32 {
         let x = self.rotation.tr_mul(&(p - self.centre));
-        let inv = &self.inv_axes[kind as usize];
+        let inv = &self.inflated[kind as usize].inv;
         let mut c = 0.0;
         for axis in 0..3 {
             c += self.exponents[axis]
@@ -591,6 +697,130 @@ mod tests {
         .unwrap();
         let c = o.contact(&vec3([4.5, 0.0, 0.0]), PointKind::Joint).unwrap();
         assert!((c.distance_sq.sqrt() - 1.5).abs() < 1e-4, "{c:?}");
+    }
+
+    /// `Obstacle::contact` as it was written before its exponent patterns:
+    /// one loop over the axes, each exponent dispatched on its own.
+    fn contact_per_axis(o: &Obstacle, p: &Vec3, kind: PointKind) -> Option<Contact> {
+        let k = kind as usize;
+        let inflated = &o.inflated[k];
+        let r = p - o.centre;
+        if r.dot(&r) > inflated.reach_sq {
+            return None;
+        }
+        let x = if o.aligned { r } else { o.rotation.tr_mul(&r) };
+        let reach = &inflated.reach;
+        if x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z {
+            return None;
+        }
+        let inv = &inflated.inv;
+        let mut c = 0.0;
+        let mut local_gradient = Vec3::zeros();
+        let mut box_sq = 0.0;
+        for axis in 0..3 {
+            let u = x[axis].abs() * inv[axis];
+            let (term, slope) = o.exponents[axis].power_and_slope(u);
+            c += term;
+            let sign = if x[axis] > 0.0 {
+                1.0
+            } else if x[axis] < 0.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            local_gradient[axis] = slope * inv[axis] * sign;
+            let outside = max(x[axis].abs() - inflated.inner[axis], 0.0);
+            box_sq += outside * outside;
+        }
+        if c > C_CUTOFF || c.is_nan() {
+            return Some(Contact {
+                clearance: f32::INFINITY,
+                gradient: Vec3::zeros(),
+                distance_sq: box_sq,
+            });
+        }
+        let clearance = c - 1.0;
+        let slope_sq = local_gradient.dot(&local_gradient);
+        let convex_sq = if clearance <= 0.0 {
+            0.0
+        } else if slope_sq > 0.0 {
+            clearance * clearance / slope_sq
+        } else {
+            box_sq
+        };
+        Some(Contact {
+            clearance,
+            gradient: if o.aligned {
+                local_gradient
+            } else {
+                o.rotation * local_gradient
+            },
+            distance_sq: if clearance <= 0.0 {
+                0.0
+            } else {
+                max(convex_sq, box_sq)
+            },
+        })
+    }
+
+    fn bits(c: Option<Contact>) -> Option<[u32; 5]> {
+        c.map(|c| {
+            [
+                c.clearance.to_bits(),
+                c.gradient.x.to_bits(),
+                c.gradient.y.to_bits(),
+                c.gradient.z.to_bits(),
+                c.distance_sq.to_bits(),
+            ]
+        })
+    }
+
+    #[test]
+    fn exponent_patterns_match_the_per_axis_loop_bit_for_bit() {
+        let mut rng = 11u64;
+        let patterns = [
+            [2.0, 2.0, 2.0],
+            [4.0, 4.0, 4.0],
+            [8.0, 8.0, 8.0],
+            [8.0, 2.0, 2.0],
+            [2.0, 8.0, 2.0],
+            [2.0, 2.0, 8.0],
+            [1.0, 1.0, 1.0],
+            [3.0, 3.0, 3.0],
+            [2.5, 8.0, 3.0],
+            [8.0, 4.0, 2.0],
+            [32.0, 32.0, 32.0],
+        ];
+        for exponents in patterns {
+            for euler_123 in [[0.0; 3], [0.3, -0.2, 0.9]] {
+                let s = SuperEllipsoid {
+                    centre: [1.0, -2.0, 0.0],
+                    semi_axes: [3.0, 1.0, 2.0],
+                    exponents,
+                    euler_123,
+                };
+                let o = Obstacle::new(0, &s, [0.5, 0.25], 6.0).unwrap();
+                let mut points = std::vec![
+                    vec3([1.0, -2.0, 0.0]),
+                    vec3([1.0, -2.0, -0.0]),
+                    vec3([4.5, -2.0, 0.0]),
+                    vec3([1.0, -3.5, 0.0]),
+                ];
+                for _ in 0..2000 {
+                    let d = vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 12.0;
+                    points.push(o.centre() + d);
+                }
+                for p in points {
+                    for kind in [PointKind::Joint, PointKind::Link] {
+                        assert_eq!(
+                            bits(o.contact(&p, kind)),
+                            bits(contact_per_axis(&o, &p, kind)),
+                            "k={exponents:?} p={p:?}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
