@@ -300,6 +300,19 @@ fn power_and_slope_of<const K: u8>(u: f32) -> (f32, f32) {
     (lower * u, K as f32 * lower)
 }
 
+/// `(u^k, k u^(k-1))` on each axis by its own exponent, as
+/// `[term_x, slope_x, term_y, slope_y, term_z, slope_z]`. Out of line and
+/// cold: the pair code's registers then need not survive `powf` calls.
+#[cold]
+#[inline(never)]
+fn axes_powers(exponents: &[Exponent; 3], ux: f32, uy: f32, uz: f32) -> [f32; 6] {
+    let [ex, ey, ez] = *exponents;
+    let (tx, sx) = ex.power_and_slope(ux);
+    let (ty, sy) = ey.power_and_slope(uy);
+    let (tz, sz) = ez.power_and_slope(uz);
+    [tx, sx, ty, sy, tz, sz]
+}
+
 /// What a point of one [`PointKind`] sees of an obstacle.
 #[derive(Clone, Copy, Debug)]
 struct Inflated {
@@ -470,12 +483,8 @@ impl Obstacle {
                 power_and_slope_of::<8>(uz),
             ),
             Powers::Axes => {
-                let [ex, ey, ez] = self.exponents;
-                (
-                    ex.power_and_slope(ux),
-                    ey.power_and_slope(uy),
-                    ez.power_and_slope(uz),
-                )
+                let [tx, sx, ty, sy, tz, sz] = axes_powers(&self.exponents, ux, uy, uz);
+                ((tx, sx), (ty, sy), (tz, sz))
             }
         };
         // The sum from 0 in axis order, as the loop it replaces (0 + t = t:
