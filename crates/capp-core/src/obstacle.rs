@@ -292,12 +292,22 @@ impl Powers {
     }
 }
 
-/// `(u^K, K u^(K-1))` for a constant integer `K >= 1`: the products of
-/// [`Exponent::power_and_slope`] for `Exponent::Integer(K)`, in its order.
+/// For an even constant exponent `K`, on one axis (`x` the coordinate in
+/// the obstacle's frame, `inv` the inverse inflated semi-axis): the term
+/// `|x inv|^K` and the gradient's component `K |x inv|^(K-1) inv sign(x)`,
+/// to the bit what [`Exponent::power_and_slope`] and the sign give
+/// (`(slope * inv) * sign`), without the sign.
+///
+/// The powers run on the signed `s = x inv` instead of `u = |x| inv`: a
+/// rounded product's magnitude does not depend on its factors' signs, so
+/// `s^(K-1)` is `u^(K-1)` with the sign of `x` (odd power) and `s^(K-1) s` is
+/// `u^K`. `x + 0` turns `-0` into `+0`: at `x = 0` the gradient is `+0`,
+/// as `(slope * inv) * 0` was.
 #[inline(always)]
-fn power_and_slope_of<const K: u8>(u: f32) -> (f32, f32) {
-    let lower = powi(u, K - 1);
-    (lower * u, K as f32 * lower)
+fn even_term_and_gradient<const K: u8>(x: f32, inv: f32) -> (f32, f32) {
+    let s = (x + 0.0) * inv;
+    let lower = powi(s, K - 1);
+    (lower * s, K as f32 * lower * inv)
 }
 
 /// `(u^k, k u^(k-1))` on each axis by its own exponent, as
@@ -450,61 +460,63 @@ impl Obstacle {
             return None;
         }
         let inv = &inflated.inv;
-        let (ux, uy, uz) = (ax * inv.x, ay * inv.y, az * inv.z);
-        let ((tx, sx), (ty, sy), (tz, sz)) = match self.powers {
+        // Per axis the term `|x/a|^k` and the gradient's component
+        // `k |x/a|^(k-1) sign(x) / a`.
+        let ((tx, gx), (ty, gy), (tz, gz)) = match self.powers {
             Powers::Same2 => (
-                power_and_slope_of::<2>(ux),
-                power_and_slope_of::<2>(uy),
-                power_and_slope_of::<2>(uz),
+                even_term_and_gradient::<2>(x.x, inv.x),
+                even_term_and_gradient::<2>(x.y, inv.y),
+                even_term_and_gradient::<2>(x.z, inv.z),
             ),
             Powers::Same4 => (
-                power_and_slope_of::<4>(ux),
-                power_and_slope_of::<4>(uy),
-                power_and_slope_of::<4>(uz),
+                even_term_and_gradient::<4>(x.x, inv.x),
+                even_term_and_gradient::<4>(x.y, inv.y),
+                even_term_and_gradient::<4>(x.z, inv.z),
             ),
             Powers::Same8 => (
-                power_and_slope_of::<8>(ux),
-                power_and_slope_of::<8>(uy),
-                power_and_slope_of::<8>(uz),
+                even_term_and_gradient::<8>(x.x, inv.x),
+                even_term_and_gradient::<8>(x.y, inv.y),
+                even_term_and_gradient::<8>(x.z, inv.z),
             ),
             Powers::CylinderX => (
-                power_and_slope_of::<8>(ux),
-                power_and_slope_of::<2>(uy),
-                power_and_slope_of::<2>(uz),
+                even_term_and_gradient::<8>(x.x, inv.x),
+                even_term_and_gradient::<2>(x.y, inv.y),
+                even_term_and_gradient::<2>(x.z, inv.z),
             ),
             Powers::CylinderY => (
-                power_and_slope_of::<2>(ux),
-                power_and_slope_of::<8>(uy),
-                power_and_slope_of::<2>(uz),
+                even_term_and_gradient::<2>(x.x, inv.x),
+                even_term_and_gradient::<8>(x.y, inv.y),
+                even_term_and_gradient::<2>(x.z, inv.z),
             ),
             Powers::CylinderZ => (
-                power_and_slope_of::<2>(ux),
-                power_and_slope_of::<2>(uy),
-                power_and_slope_of::<8>(uz),
+                even_term_and_gradient::<2>(x.x, inv.x),
+                even_term_and_gradient::<2>(x.y, inv.y),
+                even_term_and_gradient::<8>(x.z, inv.z),
             ),
             Powers::Axes => {
+                let (ux, uy, uz) = (ax * inv.x, ay * inv.y, az * inv.z);
                 let [tx, sx, ty, sy, tz, sz] = axes_powers(&self.exponents, ux, uy, uz);
-                ((tx, sx), (ty, sy), (tz, sz))
+                // d|x|/dx = sign(x); zero at x = 0 (the octahedron's kink).
+                let sign = |x: f32| {
+                    if x > 0.0 {
+                        1.0
+                    } else if x < 0.0 {
+                        -1.0
+                    } else {
+                        0.0
+                    }
+                };
+                (
+                    (tx, sx * inv.x * sign(x.x)),
+                    (ty, sy * inv.y * sign(x.y)),
+                    (tz, sz * inv.z * sign(x.z)),
+                )
             }
         };
         // The sum from 0 in axis order, as the loop it replaces (0 + t = t:
         // the terms are never -0).
         let c = tx + ty + tz;
-        // d|x|/dx = sign(x); zero at x = 0 (the octahedron's kink).
-        let sign = |x: f32| {
-            if x > 0.0 {
-                1.0
-            } else if x < 0.0 {
-                -1.0
-            } else {
-                0.0
-            }
-        };
-        let local_gradient = Vec3::new(
-            sx * inv.x * sign(x.x),
-            sy * inv.y * sign(x.y),
-            sz * inv.z * sign(x.z),
-        );
+        let local_gradient = Vec3::new(gx, gy, gz);
         let inner = &inflated.inner;
         let (ox, oy, oz) = (
             max(ax - inner.x, 0.0),
