@@ -199,10 +199,6 @@ pub fn potential_gradient<const N: usize>(
     mu: &mut [f32],
     distance_sq: &mut [f32],
 ) -> ObstacleField {
-    let mut field = ObstacleField {
-        clear: true,
-        ..ObstacleField::default()
-    };
     let mut force = Vec3::zeros();
     let mut moment = Vec3::zeros();
     let n = frames.len().min(mu.len()).min(distance_sq.len());
@@ -213,6 +209,13 @@ pub fn potential_gradient<const N: usize>(
     } else {
         settings.influence_distance * settings.influence_distance
     };
+    // The field's sums, kept in locals (not in the returned value) while
+    // the pairs go by. `closest` starts at infinity: a pair within the
+    // potential's influence has a finite `C - 1`, so the first one is kept.
+    let mut potential = 0.0;
+    let mut active_pairs = 0u32;
+    let mut clear = true;
+    let (mut closest, mut closest_point, mut closest_obstacle) = (f32::INFINITY, 0u16, 0u8);
     // The nearest pair of the arm: link, point id, obstacle, and that link's
     // distance to every other obstacle.
     let mut nearest: Option<(u8, u16, u8, f32)> = None;
@@ -245,20 +248,17 @@ pub fn potential_gradient<const N: usize>(
                     // Beyond the potential's cut-off: only the distance counts.
                     continue;
                 }
-                field.active_pairs = field.active_pairs.saturating_add(1);
-                if field.clearance.is_none_or(|c| contact.clearance < c.value) {
-                    field.clearance = Some(Clearance {
-                        value: contact.clearance,
-                        point: point.id,
-                        obstacle: index,
-                    });
+                active_pairs += 1;
+                if contact.clearance < closest {
+                    (closest, closest_point, closest_obstacle) =
+                        (contact.clearance, point.id, index);
                 }
                 if contact.clearance <= 0.0 {
-                    field.clear = false;
+                    clear = false;
                     continue;
                 }
                 let inv = 1.0 / contact.clearance;
-                field.potential += inv;
+                potential += inv;
                 f -= contact.gradient * (inv * inv);
             }
             force += f;
@@ -277,12 +277,21 @@ pub fn potential_gradient<const N: usize>(
             _ => z.dot(&moment),
         };
     }
-    field.nearest = nearest.and_then(|(link, point, obstacle, others_sq)| {
-        half_space(
-            frames, obstacles, settings, link, point, obstacle, others_sq,
-        )
-    });
-    field
+    ObstacleField {
+        potential,
+        clearance: (active_pairs > 0).then_some(Clearance {
+            value: closest,
+            point: closest_point,
+            obstacle: closest_obstacle,
+        }),
+        active_pairs: active_pairs.min(u16::MAX as u32) as u16,
+        clear,
+        nearest: nearest.and_then(|(link, point, obstacle, others_sq)| {
+            half_space(
+                frames, obstacles, settings, link, point, obstacle, others_sq,
+            )
+        }),
+    }
 }
 
 /// The half-space of [`HalfSpace`] at avoidance point `point` (on `link`)

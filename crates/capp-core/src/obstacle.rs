@@ -524,7 +524,8 @@ impl Obstacle {
             max(az - inner.z, 0.0),
         );
         let box_sq = ox * ox + oy * oy + oz * oz;
-        if c > C_CUTOFF || c.is_nan() {
+        // Beyond the cut-off, or NaN: one comparison.
+        if !(c <= C_CUTOFF) {
             return Some(Contact {
                 clearance: f32::INFINITY,
                 gradient: Vec3::zeros(),
