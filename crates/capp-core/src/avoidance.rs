@@ -23,7 +23,7 @@
 
 use crate::kinematics::Frames;
 use crate::math::{min, norm, Vec3};
-use crate::obstacle::{Obstacle, PointKind};
+use crate::obstacle::{Obstacle, Pair, PointKind};
 use crate::robot::{JointKind, Robot};
 
 /// Where the avoidance points are and how much room they need.
@@ -232,34 +232,50 @@ pub fn potential_gradient<const N: usize>(
         for point in link_points(frames, settings, j) {
             let mut f = Vec3::zeros();
             for (index, obstacle) in obstacles.iter().enumerate() {
-                let Some(contact) = obstacle.contact(&point.position, point.kind) else {
-                    continue;
-                };
                 let index = index as u8;
-                if contact.distance_sq < link_sq {
-                    if index != link_obstacle {
-                        others_sq = link_sq;
+                // The link's nearest pair and its distance to the others.
+                let mut nearer = |distance_sq: f32| {
+                    if distance_sq < link_sq {
+                        if index != link_obstacle {
+                            others_sq = link_sq;
+                        }
+                        (link_sq, link_obstacle, link_point) = (distance_sq, index, point.id);
+                    } else if index != link_obstacle {
+                        others_sq = min(others_sq, distance_sq);
                     }
-                    (link_sq, link_obstacle, link_point) = (contact.distance_sq, index, point.id);
-                } else if index != link_obstacle {
-                    others_sq = min(others_sq, contact.distance_sq);
-                }
-                if contact.clearance == f32::INFINITY {
-                    // Beyond the potential's cut-off: only the distance counts.
-                    continue;
-                }
+                };
+                let (clearance, gradient) = match obstacle.pair(&point.position, point.kind) {
+                    Pair::Far => continue,
+                    Pair::Beyond { distance_sq } => {
+                        // Beyond the potential's cut-off: only the distance counts.
+                        nearer(distance_sq);
+                        continue;
+                    }
+                    Pair::Inside { clearance, .. } => {
+                        nearer(0.0);
+                        (clearance, None)
+                    }
+                    Pair::Near {
+                        clearance,
+                        gradient,
+                        distance_sq,
+                    } => {
+                        nearer(distance_sq);
+                        (clearance, Some(gradient))
+                    }
+                };
+                // Within the potential's influence: `clearance` is finite.
                 active_pairs += 1;
-                if contact.clearance < closest {
-                    (closest, closest_point, closest_obstacle) =
-                        (contact.clearance, point.id, index);
+                if clearance < closest {
+                    (closest, closest_point, closest_obstacle) = (clearance, point.id, index);
                 }
-                if contact.clearance <= 0.0 {
+                let Some(gradient) = gradient else {
                     clear = false;
                     continue;
-                }
-                let inv = 1.0 / contact.clearance;
+                };
+                let inv = 1.0 / clearance;
                 potential += inv;
-                f -= contact.gradient * (inv * inv);
+                f -= gradient * (inv * inv);
             }
             force += f;
             moment += (point.position - pivot).cross(&f);

@@ -323,6 +323,36 @@ fn axes_powers(exponents: &[Exponent; 3], ux: f32, uy: f32, uz: f32) -> [f32; 6]
     [tx, sx, ty, sy, tz, sz]
 }
 
+/// One avoidance point against one obstacle, by case: what
+/// [`Obstacle::contact`] gives, without its tests being made again.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Pair {
+    /// Outside the influence box (`contact` gives `None`).
+    Far,
+    /// Within the box, `C` beyond [`C_CUTOFF`] (or NaN): only the distance
+    /// bound counts (`clearance` infinite, `gradient` zero).
+    Beyond {
+        /// As [`Contact::distance_sq`].
+        distance_sq: f32,
+    },
+    /// On or inside the inflated surface, `C - 1 <= 0` (`distance_sq` 0).
+    Inside {
+        /// As [`Contact::clearance`].
+        clearance: f32,
+        /// As [`Contact::gradient`].
+        gradient: Vec3,
+    },
+    /// Outside the inflated surface, within influence.
+    Near {
+        /// As [`Contact::clearance`], positive and finite.
+        clearance: f32,
+        /// As [`Contact::gradient`].
+        gradient: Vec3,
+        /// As [`Contact::distance_sq`].
+        distance_sq: f32,
+    },
+}
+
 /// What a point of one [`PointKind`] sees of an obstacle.
 #[derive(Clone, Copy, Debug)]
 struct Inflated {
@@ -435,30 +465,71 @@ impl Obstacle {
     /// `C(p) - 1`, its gradient and a distance bound for a point of `kind`, or
     /// `None` when the point is outside the influence region (then it is at
     /// least the influence distance from the inflated surface).
-    // Always inlined: most pairs end at the sphere test, which then costs a
-    // dozen instructions instead of a call.
     #[inline(always)]
     pub fn contact(&self, p: &Vec3, kind: PointKind) -> Option<Contact> {
+        match self.pair(p, kind) {
+            Pair::Far => None,
+            Pair::Beyond { distance_sq } => Some(Contact {
+                clearance: f32::INFINITY,
+                gradient: Vec3::zeros(),
+                distance_sq,
+            }),
+            Pair::Inside {
+                clearance,
+                gradient,
+            } => Some(Contact {
+                clearance,
+                gradient,
+                distance_sq: 0.0,
+            }),
+            Pair::Near {
+                clearance,
+                gradient,
+                distance_sq,
+            } => Some(Contact {
+                clearance,
+                gradient,
+                distance_sq,
+            }),
+        }
+    }
+
+    /// [`Obstacle::contact`], sorted by case, so that a caller that
+    /// inlines it branches once per pair instead of testing the
+    /// [`Contact`] again.
+    // Always inlined: most pairs end at the box test, which then costs a
+    // dozen instructions instead of a call.
+    #[inline(always)]
+    pub(crate) fn pair(&self, p: &Vec3, kind: PointKind) -> Pair {
         let inflated = match kind {
             PointKind::Joint => &self.inflated[0],
             PointKind::Link => &self.inflated[1],
         };
         let r = p - self.centre;
-        // Cheap sphere test first: most pairs on a long arm end here.
-        if r.dot(&r) > inflated.reach_sq {
-            return None;
-        }
-        // R^T r by the columns of R (no stored transpose: 36 bytes an obstacle).
+        let reach = &inflated.reach;
+        let outside = |x: &Vec3| x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z;
         let x = if self.aligned {
+            // The box test is the whole test: a point inside the box is
+            // inside its sphere (`|r_i| <= reach_i` on every axis makes
+            // every rounded square, and so the rounded sum, at most
+            // `reach_sq`), so the sphere test would only repeat it.
+            if outside(&r) {
+                return Pair::Far;
+            }
             r
         } else {
-            self.rotation.tr_mul(&r)
+            // A cheap sphere test first, before the rotation.
+            if r.dot(&r) > inflated.reach_sq {
+                return Pair::Far;
+            }
+            // R^T r by the columns of R (no stored transpose: 36 bytes an obstacle).
+            let x = self.rotation.tr_mul(&r);
+            if outside(&x) {
+                return Pair::Far;
+            }
+            x
         };
-        let reach = &inflated.reach;
         let (ax, ay, az) = (x.x.abs(), x.y.abs(), x.z.abs());
-        if ax > reach.x || ay > reach.y || az > reach.z {
-            return None;
-        }
         let inv = &inflated.inv;
         // Per axis the term `|x/a|^k` and the gradient's component
         // `k |x/a|^(k-1) sign(x) / a`.
@@ -526,34 +597,33 @@ impl Obstacle {
         let box_sq = ox * ox + oy * oy + oz * oz;
         // Beyond the cut-off, or NaN: one comparison.
         if !(c <= C_CUTOFF) {
-            return Some(Contact {
-                clearance: f32::INFINITY,
-                gradient: Vec3::zeros(),
+            return Pair::Beyond {
                 distance_sq: box_sq,
-            });
+            };
         }
         let clearance = c - 1.0;
+        let gradient = if self.aligned {
+            local_gradient
+        } else {
+            self.rotation * local_gradient
+        };
+        if clearance <= 0.0 {
+            return Pair::Inside {
+                clearance,
+                gradient,
+            };
+        }
         let slope_sq = local_gradient.dot(&local_gradient);
-        let convex_sq = if clearance <= 0.0 {
-            0.0
-        } else if slope_sq > 0.0 {
+        let convex_sq = if slope_sq > 0.0 {
             clearance * clearance / slope_sq
         } else {
             box_sq
         };
-        Some(Contact {
+        Pair::Near {
             clearance,
-            gradient: if self.aligned {
-                local_gradient
-            } else {
-                self.rotation * local_gradient
-            },
-            distance_sq: if clearance <= 0.0 {
-                0.0
-            } else {
-                max(convex_sq, box_sq)
-            },
-        })
+            gradient,
+            distance_sq: max(convex_sq, box_sq),
+        }
     }
 
     /// `C(p) - 1` with no influence cut-off (for reporting and checks; may be `inf`).
