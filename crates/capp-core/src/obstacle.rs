@@ -301,11 +301,11 @@ impl Powers {
 /// The powers run on the signed `s = x inv` instead of `u = |x| inv`: a
 /// rounded product's magnitude does not depend on its factors' signs, so
 /// `s^(K-1)` is `u^(K-1)` with the sign of `x` (odd power) and `s^(K-1) s` is
-/// `u^K`. `x + 0` turns `-0` into `+0`: at `x = 0` the gradient is `+0`,
-/// as `(slope * inv) * 0` was.
+/// `u^K`. `x` must not be `-0`: at `x = 0` the gradient is `+0`, as
+/// `(slope * inv) * 0` was.
 #[inline(always)]
 fn even_term_and_gradient<const K: u8>(x: f32, inv: f32) -> (f32, f32) {
-    let s = (x + 0.0) * inv;
+    let s = x * inv;
     let lower = powi(s, K - 1);
     (lower * s, K as f32 * lower * inv)
 }
@@ -371,6 +371,9 @@ struct Inflated {
 /// a pair test reads come first.
 #[derive(Clone, Copy, Debug)]
 pub struct Obstacle {
+    /// The centre with every `+0` coordinate stored as `-0`: `p - centre`
+    /// is then the same subtraction, except that it never gives `-0`
+    /// (`-0 - (+0)` is `-0`, `-0 - (-0)` is `+0`).
     centre: Vec3,
     /// Per [`PointKind`].
     inflated: [Inflated; 2],
@@ -437,7 +440,7 @@ impl Obstacle {
             }
         });
         Ok(Obstacle {
-            centre: vec3(s.centre),
+            centre: vec3(s.centre.map(|c| if c == 0.0 { -0.0 } else { c })),
             inflated,
             aligned: s.euler_123 == [0.0; 3],
             powers: Powers::new(s.exponents),
@@ -454,7 +457,7 @@ impl Obstacle {
 
     /// Centre, world frame.
     pub fn centre(&self) -> Vec3 {
-        self.centre
+        vec3(self.source.centre)
     }
 
     /// Orientation `R`: the obstacle's axes as world-frame columns.
@@ -505,25 +508,36 @@ impl Obstacle {
             PointKind::Joint => &self.inflated[0],
             PointKind::Link => &self.inflated[1],
         };
-        let r = p - self.centre;
         let reach = &inflated.reach;
         let outside = |x: &Vec3| x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z;
         let x = if self.aligned {
             // The box test is the whole test: a point inside the box is
             // inside its sphere (`|r_i| <= reach_i` on every axis makes
             // every rounded square, and so the rounded sum, at most
-            // `reach_sq`), so the sphere test would only repeat it.
-            if outside(&r) {
+            // `reach_sq`), so the sphere test would only repeat it. An
+            // axis at a time: most pairs end at the first.
+            let rx = p.x - self.centre.x;
+            if rx.abs() > reach.x {
                 return Pair::Far;
             }
-            r
+            let ry = p.y - self.centre.y;
+            if ry.abs() > reach.y {
+                return Pair::Far;
+            }
+            let rz = p.z - self.centre.z;
+            if rz.abs() > reach.z {
+                return Pair::Far;
+            }
+            Vec3::new(rx, ry, rz)
         } else {
+            let r = p - self.centre;
             // A cheap sphere test first, before the rotation.
             if r.dot(&r) > inflated.reach_sq {
                 return Pair::Far;
             }
-            // R^T r by the columns of R (no stored transpose: 36 bytes an obstacle).
-            let x = self.rotation.tr_mul(&r);
+            // R^T r by the columns of R (no stored transpose: 36 bytes an
+            // obstacle), with -0 made +0 (as the aligned `r` never is).
+            let x = self.rotation.tr_mul(&r).add_scalar(0.0);
             if outside(&x) {
                 return Pair::Far;
             }
@@ -628,7 +642,7 @@ impl Obstacle {
 
     /// `C(p) - 1` with no influence cut-off (for reporting and checks; may be `inf`).
     pub fn clearance_uncut(&self, p: &Vec3, kind: PointKind) -> f32 {
-        let x = self.rotation.tr_mul(&(p - self.centre));
+        let x = self.rotation.tr_mul(&(p - self.centre()));
         let inv = &self.inflated[kind as usize].inv;
         let mut c = 0.0;
         for axis in 0..3 {
@@ -796,7 +810,7 @@ mod tests {
     fn contact_per_axis(o: &Obstacle, p: &Vec3, kind: PointKind) -> Option<Contact> {
         let k = kind as usize;
         let inflated = &o.inflated[k];
-        let r = p - o.centre;
+        let r = p - o.centre();
         if r.dot(&r) > inflated.reach_sq {
             return None;
         }
