@@ -357,11 +357,17 @@ pub fn damped_rate<const N: usize>(
     // One-sided projection in the metric of the damped problem; the final
     // approach (the rest within a few steps at the rate limits) may come
     // closer.
-    let final_approach = time_at_limits(robot, rate) <= FINAL_APPROACH_STEPS * time_step_s;
+    let unconstrained_time = time_at_limits(robot, rate);
+    let final_approach = unconstrained_time <= FINAL_APPROACH_STEPS * time_step_s;
     let constrained = project_guard(guard, final_approach, ws, rate);
 
-    // Speed: the most loaded joint at its limit, or the whole step in one.
-    let time_at_limits = time_at_limits(robot, rate);
+    // Speed: the most loaded joint at its limit, or the whole step in one
+    // (the rate is the one just timed unless the projection changed it).
+    let time_at_limits = if constrained {
+        time_at_limits(robot, rate)
+    } else {
+        unconstrained_time
+    };
     if !(time_at_limits > 0.0 && time_at_limits.is_finite()) {
         return idle(rate);
     }
