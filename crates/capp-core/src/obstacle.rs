@@ -609,13 +609,14 @@ impl Obstacle {
             max(az - inner.z, 0.0),
         );
         let box_sq = ox * ox + oy * oy + oz * oz;
-        // Beyond the cut-off, or NaN: one comparison.
-        if !(c <= C_CUTOFF) {
+        // Within the cut-off (one comparison: NaN is beyond it too).
+        let clearance = if c <= C_CUTOFF {
+            c - 1.0
+        } else {
             return Pair::Beyond {
                 distance_sq: box_sq,
             };
-        }
-        let clearance = c - 1.0;
+        };
         let gradient = if self.aligned {
             local_gradient
         } else {
