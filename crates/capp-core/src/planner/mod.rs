@@ -263,6 +263,70 @@ impl<const N: usize> Evaluation<N> {
     }
 }
 
+/// The evaluation of the current configuration (`now`) and of the candidate
+/// (`next`), in two slots: accepting the candidate swaps their roles, not
+/// their contents (an evaluation is some 700 bytes for PIPS).
+#[derive(Clone, Debug)]
+struct Evaluations<const N: usize> {
+    slots: [Evaluation<N>; 2],
+    /// The slot of `now` (0 or 1); `next` is the other.
+    now: usize,
+}
+
+impl<const N: usize> Evaluations<N> {
+    fn new() -> Self {
+        Evaluations {
+            slots: [Evaluation::new(), Evaluation::new()],
+            now: 0,
+        }
+    }
+
+    /// Both evaluations to their initial values, in place.
+    fn reset(&mut self) {
+        self.slots.iter_mut().for_each(Evaluation::reset);
+        self.now = 0;
+    }
+
+    // `& 1`: the index is provably in bounds (no panic path).
+    #[inline(always)]
+    fn now(&self) -> &Evaluation<N> {
+        &self.slots[self.now & 1]
+    }
+
+    #[inline(always)]
+    fn now_mut(&mut self) -> &mut Evaluation<N> {
+        &mut self.slots[self.now & 1]
+    }
+
+    #[inline(always)]
+    fn next(&self) -> &Evaluation<N> {
+        &self.slots[(self.now & 1) ^ 1]
+    }
+
+    #[inline(always)]
+    fn next_mut(&mut self) -> &mut Evaluation<N> {
+        &mut self.slots[(self.now & 1) ^ 1]
+    }
+
+    /// `(now, next)`, both writable.
+    #[inline(always)]
+    fn both_mut(&mut self) -> (&mut Evaluation<N>, &mut Evaluation<N>) {
+        let [a, b] = &mut self.slots;
+        if self.now & 1 == 0 {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    }
+
+    /// The candidate becomes the current evaluation (and the old current
+    /// one the slot the next candidate is evaluated into).
+    #[inline(always)]
+    fn accept(&mut self) {
+        self.now ^= 1;
+    }
+}
+
 /// The planner's mutable state: the joint vector and every buffer a step
 /// needs, sized once for `N` joints. The model ([`Scenario`]) is passed to
 /// each call, never stored.
@@ -270,8 +334,8 @@ impl<const N: usize> Evaluation<N> {
 pub struct Planner<const N: usize> {
     n: usize,
     q: [f32; N],
-    now: Evaluation<N>,
-    next: Evaluation<N>,
+    /// The evaluations of the current configuration and of the candidate.
+    evals: Evaluations<N>,
     q_next: [f32; N],
     rate: [f32; N],
     /// The buffers of the law that runs.
@@ -306,8 +370,7 @@ impl<const N: usize> Planner<N> {
         let mut planner = Planner {
             n: 0,
             q: [0.0; N],
-            now: Evaluation::new(),
-            next: Evaluation::new(),
+            evals: Evaluations::new(),
             q_next: [0.0; N],
             rate: [0.0; N],
             law: LawWorkspace::for_kind(LawKind::DampedLeastSquares),
@@ -384,9 +447,11 @@ impl<const N: usize> Planner<N> {
             return Err(StartError::ScenarioMismatch);
         };
         let n = self.n.min(N);
-        self.now.evaluate(scenario, &self.q[..n], &target);
-        if !self.now.field.clear {
-            let c = self.now.field.clearance.unwrap_or(Clearance {
+        self.evals
+            .now_mut()
+            .evaluate(scenario, &self.q[..n], &target);
+        if !self.evals.now().field.clear {
+            let c = self.evals.now().field.clearance.unwrap_or(Clearance {
                 value: 0.0,
                 point: 0,
                 obstacle: 0,
@@ -396,7 +461,7 @@ impl<const N: usize> Planner<N> {
                 obstacle: c.obstacle,
             });
         }
-        self.best_v = self.now.error.v;
+        self.best_v = self.evals.now().error.v;
         self.last = self.report(0.0, false, 0);
         Ok(())
     }
@@ -408,8 +473,7 @@ impl<const N: usize> Planner<N> {
         let Planner {
             n,
             q,
-            now,
-            next,
+            evals,
             q_next,
             rate,
             law,
@@ -425,8 +489,7 @@ impl<const N: usize> Planner<N> {
         *n = len;
         q.fill(0.0);
         q[..len].copy_from_slice(&start[..len]);
-        now.reset();
-        next.reset();
+        evals.reset();
         *q_next = *q;
         rate.fill(0.0);
         law.clear();
@@ -466,12 +529,12 @@ impl<const N: usize> Planner<N> {
 
     /// Frames of the current configuration.
     pub fn frames(&self) -> &Frames<N> {
-        &self.now.frames
+        &self.evals.now().frames
     }
 
     /// Current obstacle gradient `mu = dP/dq` (eq. 20).
     pub fn obstacle_gradient(&self) -> &[f32] {
-        &self.now.mu[..self.n.min(N)]
+        &self.evals.now().mu[..self.n.min(N)]
     }
 
     /// Current phase.
@@ -493,10 +556,10 @@ impl<const N: usize> Planner<N> {
         StepReport {
             step: self.step,
             time_step_s: h,
-            v: self.now.error.v,
-            position_error: self.now.error.position,
-            orientation_error: self.now.error.orientation,
-            clearance: self.now.field.clearance,
+            v: self.evals.now().error.v,
+            position_error: self.evals.now().error.position,
+            orientation_error: self.evals.now().error.orientation,
+            clearance: self.evals.now().field.clearance,
             phase: self.phase,
             constrained,
             halvings,
@@ -523,10 +586,12 @@ impl<const N: usize> Planner<N> {
                     // While detouring, `now.error` is the detour point's; the
                     // waypoint is judged by its own.
                     let e = match self.escape.subgoal() {
-                        Some(_) => {
-                            pose_error(&self.now.frames, target, settings.law.orientation_scale)
-                        }
-                        None => self.now.error,
+                        Some(_) => pose_error(
+                            &self.evals.now().frames,
+                            target,
+                            settings.law.orientation_scale,
+                        ),
+                        None => self.evals.now().error,
                     };
                     e.position <= settings.position_tolerance
                         && (!e.has_orientation || e.orientation <= settings.orientation_tolerance)
@@ -544,12 +609,14 @@ impl<const N: usize> Planner<N> {
                 waypoint: next as u8,
             };
             if let Some(target) = targets.get(next) {
-                self.now.error = target_error(scenario, &self.now.frames, &self.q[..n], target);
+                self.evals.now_mut().error =
+                    target_error(scenario, &self.evals.now().frames, &self.q[..n], target);
             }
-            self.best_v = self.now.error.v;
+            self.best_v = self.evals.now().error.v;
             self.best_step = self.step;
             self.error_step = 0.0;
-            self.escape.next_waypoint(&self.q[..n], self.now.error.v);
+            self.escape
+                .next_waypoint(&self.q[..n], self.evals.now().error.v);
         }
     }
 
@@ -585,31 +652,34 @@ impl<const N: usize> Planner<N> {
         // reaches it, so there is nothing to escape to.
         let out_of_reach = target.joints.is_none()
             && norm(&target.position) > scenario.robot().reach() + settings.position_tolerance;
-        if settings.escape.attempts == 0 || out_of_reach || self.now.error.v <= 0.5 * noise * noise
+        if settings.escape.attempts == 0
+            || out_of_reach
+            || self.evals.now().error.v <= 0.5 * noise * noise
         {
             self.phase = Phase::Done(Outcome::Stalled);
             return;
         }
         let n = self.n.min(N);
+        let (now, next) = self.evals.both_mut();
         self.escape.on_stall(
             &settings.escape,
             scenario.robot(),
             scenario.obstacles(),
             &self.q[..n],
-            &self.now.frames,
-            self.now.error.v,
-            &self.now.mu[..n],
-            self.now.field.clearance.map(|c| c.obstacle),
+            &now.frames,
+            now.error.v,
+            &now.mu[..n],
+            now.field.clearance.map(|c| c.obstacle),
             target.position,
             settings.avoidance.joint_margin,
-            &mut self.next.frames,
+            &mut next.frames,
         );
         // A detour begins: from now on `now.error` is its point's (the
         // configuration does not change until the next step; later steps
         // evaluate against the point).
         if let Some(point) = self.escape.subgoal() {
-            self.now.error = pose_error(
-                &self.now.frames,
+            self.evals.now_mut().error = pose_error(
+                &self.evals.now().frames,
                 &Target::pose(point, None),
                 settings.law.orientation_scale,
             );
@@ -628,7 +698,10 @@ impl<const N: usize> Planner<N> {
         let n = self.n.min(N);
         let (gap, reached) = if let Some(point) = self.escape.subgoal() {
             let radius = DETOUR_RADIUS * robot.reach();
-            (norm(&(point - self.now.frames.end_position())), radius)
+            (
+                norm(&(point - self.evals.now().frames.end_position())),
+                radius,
+            )
         } else if let Some(goal) = self.escape.goal() {
             (
                 gap(robot, &self.q[..n], &goal[..n]),
@@ -643,8 +716,9 @@ impl<const N: usize> Planner<N> {
                 self.phase = Phase::Done(Outcome::Stalled);
             }
             // Back to the target: its error, and a fresh stall window.
-            self.now.error = target_error(scenario, &self.now.frames, &self.q[..n], target);
-            self.best_v = self.now.error.v;
+            self.evals.now_mut().error =
+                target_error(scenario, &self.evals.now().frames, &self.q[..n], target);
+            self.best_v = self.evals.now().error.v;
             self.best_step = self.step;
         }
     }
@@ -707,7 +781,7 @@ impl<const N: usize> Planner<N> {
 
         // The law proposes a rate and a step (eqs. 13-18, 24).
         let engage = strength(
-            self.now.field.clearance.map(|c| c.value),
+            self.evals.now().field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
         );
         if !self.law.suits(settings.law.kind) {
@@ -716,8 +790,8 @@ impl<const N: usize> Planner<N> {
             self.law.reset(settings.law.kind);
         }
         let guard = Guard::at(
-            &self.now.mu[..n],
-            self.now.field.clearance.map(|c| c.value),
+            &self.evals.now().mu[..n],
+            self.evals.now().field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
             CONTACT_FLOOR,
         );
@@ -743,10 +817,10 @@ impl<const N: usize> Planner<N> {
             }
             (None, LawWorkspace::FirstOrder(ws)) => first_order_rate(
                 robot,
-                &self.now.frames,
+                &self.evals.now().frames,
                 &self.q[..n],
-                &self.now.error,
-                &self.now.mu[..n],
+                &self.evals.now().error,
+                &self.evals.now().mu[..n],
                 engage,
                 &settings,
                 self.error_step,
@@ -756,9 +830,9 @@ impl<const N: usize> Planner<N> {
             (None, LawWorkspace::Damped(ws)) => {
                 let step = damped_rate(
                     robot,
-                    &self.now.frames,
+                    &self.evals.now().frames,
                     &self.q[..n],
-                    &self.now.error,
+                    &self.evals.now().error,
                     &guard,
                     &settings.law,
                     settings.time_step_s,
@@ -786,13 +860,13 @@ impl<const N: usize> Planner<N> {
                 }
             }
         }
-        let err = self.now.error.position;
+        let err = self.evals.now().error.position;
         // No point may travel farther than a fraction of its clearance.
         h = advancement(
             robot,
-            &self.now.frames,
-            &self.now.distance_sq[..n],
-            self.now.field.nearest.as_ref(),
+            &self.evals.now().frames,
+            &self.evals.now().distance_sq[..n],
+            self.evals.now().field.nearest.as_ref(),
             &self.rate[..n],
             h,
             settings.avoidance.advance_fraction,
@@ -807,12 +881,17 @@ impl<const N: usize> Planner<N> {
                     let joint = &robot.joints()[j];
                     self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
                 }
-                self.next
+                self.evals
+                    .next_mut()
                     .evaluate(scenario, &self.q_next[..n], &drive_target);
                 let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
-                let safe = self.next.safe_after(self.now.closest(), floor);
+                let safe = self
+                    .evals
+                    .next()
+                    .safe_after(self.evals.now().closest(), floor);
                 // A walk may climb V: it is leaving a dead end.
-                let descends = constrained || walking || self.next.error.v <= self.now.error.v;
+                let descends =
+                    constrained || walking || self.evals.next().error.v <= self.evals.now().error.v;
                 if safe && descends && all_finite(&self.q_next[..n]) {
                     accepted = true;
                     break;
@@ -828,9 +907,9 @@ impl<const N: usize> Planner<N> {
         if accepted {
             // A copy, not a swap (half the memory traffic): `next` is
             // evaluated again before anything reads it.
-            self.now = self.next;
+            self.evals.accept();
             self.q[..n].copy_from_slice(&self.q_next[..n]);
-            self.error_step = self.now.error.position - err;
+            self.error_step = self.evals.now().error.position - err;
         } else {
             h = 0.0;
             self.rate[..n].fill(0.0);
@@ -840,11 +919,11 @@ impl<const N: usize> Planner<N> {
         if escaping {
             self.after_escape_step(scenario, &target);
         } else {
-            if self.now.error.v < self.best_v * (1.0 - settings.stall_progress) {
-                self.best_v = self.now.error.v;
+            if self.evals.now().error.v < self.best_v * (1.0 - settings.stall_progress) {
+                self.best_v = self.evals.now().error.v;
                 self.best_step = self.step;
             }
-            self.escape.record(&self.q[..n], self.now.error.v);
+            self.escape.record(&self.q[..n], self.evals.now().error.v);
         }
         self.pass_waypoints(scenario);
         if let Phase::Moving { .. } = self.phase {
@@ -860,7 +939,11 @@ impl<const N: usize> Planner<N> {
         self.last = self.report(h, constrained, halvings);
         if self.escape.subgoal().is_some() {
             // Report the target's errors, not the detour point's.
-            let e = pose_error(&self.now.frames, &target, settings.law.orientation_scale);
+            let e = pose_error(
+                &self.evals.now().frames,
+                &target,
+                settings.law.orientation_scale,
+            );
             self.last.v = e.v;
             self.last.position_error = e.position;
             self.last.orientation_error = e.orientation;

@@ -86,7 +86,7 @@ impl<const N: usize> Planner<N> {
             return Slice::Working;
         }
         let near = GOAL_NEAR * settings.position_tolerance;
-        let v = self.next.error.v;
+        let v = self.evals.next().error.v;
         let search = self.escape.search_mut();
         if v <= 0.5 * near * near {
             search.goal = search.probe;
@@ -99,11 +99,11 @@ impl<const N: usize> Planner<N> {
         }
         search.probe_steps += 1;
         let probe = search.probe;
-        let c = self.next.closest();
+        let c = self.evals.next().closest();
         *spent += 1;
         let taken = self.imagine_law_step(scenario, &probe[..n], edge_s) > 0.0
             && self.imagine_accept(scenario, target, c)
-            && self.next.error.v < v;
+            && self.evals.next().error.v < v;
         let search = self.escape.search_mut();
         if taken {
             search.probe = self.q_next;
@@ -131,14 +131,14 @@ impl<const N: usize> Planner<N> {
         search.trunk_steps += 1;
         let base = search.base as usize;
         let qa = *search.tree.node(base);
-        self.next.evaluate(scenario, &qa[..n], target);
+        self.evals.next_mut().evaluate(scenario, &qa[..n], target);
         *spent += 2;
-        let c_a = self.next.closest();
+        let c_a = self.evals.next().closest();
         let mut leave = c_a >= settings.avoidance.engage_clearance;
         if !leave {
             // Down the potential in the metric of the rate limits.
             for (j, joint) in robot.joints().iter().enumerate().take(n) {
-                self.rate[j] = -self.next.mu[j] * joint.max_rate * joint.max_rate;
+                self.rate[j] = -self.evals.next().mu[j] * joint.max_rate * joint.max_rate;
             }
             let t = time_at_limits(robot, &self.rate[..n]);
             leave = !(t > 0.0 && t.is_finite());
@@ -148,7 +148,7 @@ impl<const N: usize> Planner<N> {
                     || !self.imagine_accept(scenario, target, c_a);
             }
         }
-        let v = self.next.error.v;
+        let v = self.evals.next().error.v;
         let search = self.escape.search_mut();
         if leave {
             search.stage = Stage::Grow;
@@ -207,9 +207,9 @@ impl<const N: usize> Planner<N> {
         }
         // The edge, checked at configurations along it: a plan, not a
         // motion (the walk along it checks each of its steps).
-        self.next.evaluate(scenario, &qa[..n], target);
+        self.evals.next_mut().evaluate(scenario, &qa[..n], target);
         *spent += 1;
-        let mut c_from = self.next.closest();
+        let mut c_from = self.evals.next().closest();
         let mut clear = all_finite(&self.rate[..n]);
         for k in 1..=EDGE_CHECKS {
             if !clear {
@@ -221,14 +221,17 @@ impl<const N: usize> Planner<N> {
             }
             *spent += 1;
             clear = self.imagine_accept(scenario, target, c_from);
-            c_from = self.next.closest();
+            c_from = self.evals.next().closest();
         }
         let search = self.escape.search_mut();
         if !clear {
             search.connecting = None;
             return Slice::Working;
         }
-        let Some(i) = search.tree.push(&self.q_next[..n], a, self.next.error.v) else {
+        let Some(i) = search
+            .tree
+            .push(&self.q_next[..n], a, self.evals.next().error.v)
+        else {
             return Slice::Failed;
         };
         if search.connecting.is_some() {
@@ -317,16 +320,16 @@ impl<const N: usize> Planner<N> {
             return 0.0;
         };
         let guard = Guard::at(
-            &self.next.mu[..n],
-            self.next.field.clearance.map(|c| c.value),
+            &self.evals.next().mu[..n],
+            self.evals.next().field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
             CONTACT_FLOOR,
         );
         damped_rate(
             robot,
-            &self.next.frames,
+            &self.evals.next().frames,
             &qa[..n],
-            &self.next.error,
+            &self.evals.next().error,
             &guard,
             &settings.law,
             edge_s,
@@ -351,9 +354,9 @@ impl<const N: usize> Planner<N> {
         }
         let h = advancement(
             robot,
-            &self.next.frames,
-            &self.next.distance_sq[..n],
-            self.next.field.nearest.as_ref(),
+            &self.evals.next().frames,
+            &self.evals.next().distance_sq[..n],
+            self.evals.next().field.nearest.as_ref(),
             &self.rate[..n],
             edge_s,
             settings.avoidance.advance_fraction,
@@ -379,8 +382,8 @@ impl<const N: usize> Planner<N> {
     ) -> bool {
         let n = self.n.min(N);
         let q = self.q_next;
-        self.next.evaluate(scenario, &q[..n], target);
+        self.evals.next_mut().evaluate(scenario, &q[..n], target);
         let floor = CONTACT_FLOOR * scenario.settings().avoidance.engage_clearance;
-        self.next.safe_after(c_from, floor) && all_finite(&q[..n])
+        self.evals.next().safe_after(c_from, floor) && all_finite(&q[..n])
     }
 }
