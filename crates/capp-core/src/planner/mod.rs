@@ -905,8 +905,6 @@ impl<const N: usize> Planner<N> {
         }
         self.step += 1;
         if accepted {
-            // A copy, not a swap (half the memory traffic): `next` is
-            // evaluated again before anything reads it.
             self.evals.accept();
             self.q[..n].copy_from_slice(&self.q_next[..n]);
             self.error_step = self.evals.now().error.position - err;
