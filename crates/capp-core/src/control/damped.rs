@@ -90,6 +90,8 @@ pub struct DampedWorkspace<const N: usize> {
     columns: [Vec6; N],
     /// The metric `M_jj`, joint units squared per second squared.
     metric: [f32; N],
+    /// `G_j = J_j . Lambda eps` (eq. 13), kept for the descent test.
+    drive: [f32; N],
     /// `L D L^T` factor of `J M J^T + mu Lambda^-1`.
     factor: Sym6,
 }
@@ -99,6 +101,7 @@ impl<const N: usize> Default for DampedWorkspace<N> {
         DampedWorkspace {
             columns: [[0.0; 6]; N],
             metric: [0.0; N],
+            drive: [0.0; N],
             factor: [[0.0; 6]; 6],
         }
     }
@@ -111,10 +114,12 @@ impl<const N: usize> DampedWorkspace<N> {
         let DampedWorkspace {
             columns,
             metric,
+            drive,
             factor,
         } = self;
         columns.fill([0.0; 6]);
         metric.fill(0.0);
+        drive.fill(0.0);
         factor.fill([0.0; 6]);
     }
 }
@@ -287,12 +292,13 @@ pub fn damped_rate<const N: usize>(
     let p = frames.end_position();
     let mut a: Sym6 = [[0.0; 6]; 6];
     let mut trace = 0.0f32;
-    for (j, (((joint, &qj), column), m)) in robot
+    for (j, ((((joint, &qj), column), m), g)) in robot
         .joints()
         .iter()
         .zip(q)
         .zip(ws.columns.iter_mut())
         .zip(ws.metric.iter_mut())
+        .zip(ws.drive.iter_mut())
         .enumerate()
     {
         let z = frames.axis(j);
@@ -306,7 +312,8 @@ pub fn damped_rate<const N: usize>(
             JointKind::Prismatic => six(z, Vec3::zeros()),
         };
         // G_j = J_j . Lambda eps (eq. 13), whose sign is eq. 18's eta.
-        *m = joint.max_rate * joint_weight(joint, qj, dot6(column, &weighted));
+        *g = dot6(column, &weighted);
+        *m = joint.max_rate * joint_weight(joint, qj, *g);
         for r in 0..6 {
             let mc = *m * column[r];
             for c in 0..=r {
@@ -342,9 +349,14 @@ pub fn damped_rate<const N: usize>(
     let mut y = eps;
     solve(&ws.factor, &mut y);
     let mut descent = 0.0f32;
-    for ((r, column), &m) in rate.iter_mut().zip(&ws.columns).zip(&ws.metric) {
+    for (((r, column), &m), &g) in rate
+        .iter_mut()
+        .zip(&ws.columns)
+        .zip(&ws.metric)
+        .zip(&ws.drive)
+    {
         *r = m * dot6(column, &y);
-        descent += dot6(column, &weighted) * *r;
+        descent += g * *r;
     }
     if (descent <= 0.0 || descent.is_nan()) && error.has_orientation {
         let mut y = six(error.e[3], sigma_half);
