@@ -353,11 +353,31 @@ pub(crate) enum Pair {
     },
 }
 
+/// The least `w` with `w * w > reach_sq` as rounded (infinity for an
+/// infinite `reach_sq`). A point with `|r_i| > w` on any axis is outside
+/// the sphere `r . r <= reach_sq` as computed: every rounded partial sum of
+/// `r . r` is at least the rounded `r_i^2`, which is at least the rounded
+/// `w * w`.
+fn sphere_bound(reach_sq: f32) -> f32 {
+    if !reach_sq.is_finite() {
+        return f32::INFINITY;
+    }
+    let mut w = libm::sqrtf(reach_sq);
+    while w * w <= reach_sq {
+        w = w.next_up();
+    }
+    w
+}
+
 /// What a point of one [`PointKind`] sees of an obstacle.
 #[derive(Clone, Copy, Debug)]
 struct Inflated {
     /// Squared radius of the sphere around the influence box.
     reach_sq: f32,
+    /// Half-extents of a world-axis box around the influence region: the
+    /// influence box itself for an aligned obstacle; for a rotated one the
+    /// box around its sphere ([`sphere_bound`] on every axis).
+    bound: Vec3,
     /// Half-extents of the influence box, `semi-axis + margin + influence`.
     reach: Vec3,
     /// `1 / (semi-axis + margin)`.
@@ -429,11 +449,18 @@ impl Obstacle {
         let [rx, ry, rz] = s.euler_123;
         let rotation = rotation_123(rx, ry, rz);
         let axes = vec3(s.semi_axes);
+        let aligned = s.euler_123 == [0.0; 3];
         let inflated = margins.map(|m| {
             let inflated = axes.add_scalar(m);
             let reach = inflated.add_scalar(influence);
+            let reach_sq = reach.dot(&reach);
             Inflated {
-                reach_sq: reach.dot(&reach),
+                reach_sq,
+                bound: if aligned {
+                    reach
+                } else {
+                    Vec3::repeat(sphere_bound(reach_sq))
+                },
                 reach,
                 inv: inflated.map(|x| 1.0 / x),
                 inner: reach.map(|r| r - influence),
@@ -442,7 +469,7 @@ impl Obstacle {
         Ok(Obstacle {
             centre: vec3(s.centre.map(|c| if c == 0.0 { -0.0 } else { c })),
             inflated,
-            aligned: s.euler_123 == [0.0; 3],
+            aligned,
             powers: Powers::new(s.exponents),
             exponents: s.exponents.map(Exponent::new),
             rotation,
@@ -508,37 +535,38 @@ impl Obstacle {
             PointKind::Joint => &self.inflated[0],
             PointKind::Link => &self.inflated[1],
         };
-        let reach = &inflated.reach;
-        let outside = |x: &Vec3| x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z;
+        // The world-axis box first, an axis at a time (most pairs end at the
+        // first). For an aligned obstacle it is the influence box, the whole
+        // test: a point inside it is inside its sphere (`|r_i| <= reach_i`
+        // on every axis makes every rounded square, and so the rounded sum,
+        // at most `reach_sq`), so the sphere test would only repeat it. For a
+        // rotated one it only drops points the sphere test would drop.
+        let bound = &inflated.bound;
+        let rx = p.x - self.centre.x;
+        if rx.abs() > bound.x {
+            return Pair::Far;
+        }
+        let ry = p.y - self.centre.y;
+        if ry.abs() > bound.y {
+            return Pair::Far;
+        }
+        let rz = p.z - self.centre.z;
+        if rz.abs() > bound.z {
+            return Pair::Far;
+        }
+        let r = Vec3::new(rx, ry, rz);
         let x = if self.aligned {
-            // The box test is the whole test: a point inside the box is
-            // inside its sphere (`|r_i| <= reach_i` on every axis makes
-            // every rounded square, and so the rounded sum, at most
-            // `reach_sq`), so the sphere test would only repeat it. An
-            // axis at a time: most pairs end at the first.
-            let rx = p.x - self.centre.x;
-            if rx.abs() > reach.x {
-                return Pair::Far;
-            }
-            let ry = p.y - self.centre.y;
-            if ry.abs() > reach.y {
-                return Pair::Far;
-            }
-            let rz = p.z - self.centre.z;
-            if rz.abs() > reach.z {
-                return Pair::Far;
-            }
-            Vec3::new(rx, ry, rz)
+            r
         } else {
-            let r = p - self.centre;
-            // A cheap sphere test first, before the rotation.
+            // The sphere test, before the rotation.
             if r.dot(&r) > inflated.reach_sq {
                 return Pair::Far;
             }
+            let reach = &inflated.reach;
             // R^T r by the columns of R (no stored transpose: 36 bytes an
             // obstacle), with -0 made +0 (as the aligned `r` never is).
             let x = self.rotation.tr_mul(&r).add_scalar(0.0);
-            if outside(&x) {
+            if x.x.abs() > reach.x || x.y.abs() > reach.y || x.z.abs() > reach.z {
                 return Pair::Far;
             }
             x
@@ -928,6 +956,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn sphere_bound_drops_only_points_outside_the_sphere() {
+        let mut rng = 5u64;
+        for reach_sq in [1.0f32, 2.0, 3.0, 1234.567, 3.0e8, 1.23e-4, 7.77e5] {
+            let w = sphere_bound(reach_sq);
+            assert!(w * w > reach_sq);
+            let below = w.next_down();
+            assert!(below * below <= reach_sq, "not the least: {reach_sq}");
+            for _ in 0..2000 {
+                // Just beyond the bound on one axis, anything within it on
+                // the others: always beyond the sphere as computed.
+                let beyond = w.next_up() * (1.0 + 1e-6 * lcg(&mut rng).abs());
+                let (a, b) = (lcg(&mut rng) * w, lcg(&mut rng) * w);
+                for r in [
+                    vec3([beyond, a, b]),
+                    vec3([a, -beyond, b]),
+                    vec3([a, b, beyond]),
+                ] {
+                    assert!(r.dot(&r) > reach_sq, "{reach_sq} {r:?}");
+                }
+            }
+        }
+        assert_eq!(sphere_bound(f32::INFINITY), f32::INFINITY);
     }
 
     #[test]
