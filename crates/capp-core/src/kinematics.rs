@@ -22,7 +22,7 @@ use crate::math::{sin_cos, Mat3, Vec3};
 use crate::robot::{JointKind, Robot};
 
 /// Every frame of the chain at one configuration. Sized once for `N` joints.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Frames<const N: usize> {
     n: usize,
     /// `origin[j]` = `o_{j+1}`, the origin of the frame after joint `j`.

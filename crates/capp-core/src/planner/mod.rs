@@ -191,7 +191,7 @@ fn target_error<const N: usize, const M: usize, const W: usize>(
 }
 
 /// Everything known about one configuration.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Evaluation<const N: usize> {
     frames: Frames<N>,
     error: PoseError,
