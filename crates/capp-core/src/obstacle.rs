@@ -387,8 +387,8 @@ struct Inflated {
     inner: Vec3,
 }
 
-/// A validated obstacle with everything a step needs precomputed. The fields
-/// a pair test reads come first.
+/// A validated obstacle with everything a step needs precomputed; the data a
+/// pair test reads for one [`PointKind`] is together in one [`Inflated`].
 #[derive(Clone, Copy, Debug)]
 pub struct Obstacle {
     /// The centre with every `+0` coordinate stored as `-0`: `p - centre`
