@@ -388,7 +388,7 @@ struct Inflated {
 }
 
 /// A validated obstacle with everything a step needs precomputed; the data a
-/// pair test reads for one [`PointKind`] is together in one [`Inflated`].
+/// pair test reads for one [`PointKind`] is kept together.
 #[derive(Clone, Copy, Debug)]
 pub struct Obstacle {
     /// The centre with every `+0` coordinate stored as `-0`: `p - centre`
