@@ -167,6 +167,7 @@ struct SettingsSpec {
     engage_clearance: Option<f64>,
     advance_fraction: Option<f64>,
     damping: Option<f64>,
+    saturation: Option<bool>,
     max_steps: Option<u32>,
     stall_window: Option<u32>,
     stall_progress: Option<f64>,
@@ -552,6 +553,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         };
     }
     settings.law.damping = f(s.damping, settings.law.damping);
+    if let Some(v) = s.saturation {
+        settings.law.saturation = v;
+    }
     settings.avoidance.engage_clearance =
         f(s.engage_clearance, settings.avoidance.engage_clearance);
     settings.avoidance.advance_fraction =

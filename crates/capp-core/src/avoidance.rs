@@ -58,7 +58,7 @@ impl AvoidanceSettings {
             points_per_link: 1,
             influence_distance: 24.0,
             engage_clearance: 1.0,
-            advance_fraction: 0.5,
+            advance_fraction: 1.0,
         }
     }
 

@@ -153,6 +153,7 @@ struct SettingsSpec {
     engage_clearance: f32,
     advance_fraction: f32,
     damping: f32,
+    saturation: bool,
     escape: (u8, u16, u16, f32, u32),
     max_steps: u32,
     stall_window: u32,
@@ -176,6 +177,7 @@ impl SettingsSpec {
             _ => LawKind::DampedLeastSquares,
         };
         s.law.damping = self.damping;
+        s.law.saturation = self.saturation;
         s.avoidance.advance_fraction = self.advance_fraction;
         let (attempts, window, walk_steps, reach, seed) = self.escape;
         s.escape.attempts = attempts;
@@ -215,7 +217,11 @@ fn settings_spec(max_steps: u32) -> impl Strategy<Value = SettingsSpec> {
             5u32..200,
             0u8..=10,
         ),
-        (0.05f32..=1.0, prop_oneof![Just(1.0e-3f32), 1.0e-5f32..=1.0]),
+        (
+            0.05f32..=1.0,
+            prop_oneof![Just(1.0e-3f32), 1.0e-5f32..=1.0],
+            any::<bool>(),
+        ),
         // Escapes off in a third of the cases, so that runs also stall.
         (
             prop_oneof![1 => Just(0u8), 2 => 1u8..=6],
@@ -245,7 +251,7 @@ fn settings_spec(max_steps: u32) -> impl Strategy<Value = SettingsSpec> {
                     stall_window,
                     max_halvings,
                 ),
-                (advance_fraction, damping),
+                (advance_fraction, damping, saturation),
                 escape,
             )| SettingsSpec {
                 time_step_s,
@@ -261,6 +267,7 @@ fn settings_spec(max_steps: u32) -> impl Strategy<Value = SettingsSpec> {
                 engage_clearance,
                 advance_fraction,
                 damping,
+                saturation,
                 escape,
                 max_steps,
                 stall_window,

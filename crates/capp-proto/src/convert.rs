@@ -131,6 +131,7 @@ impl From<capp_core::Settings> for Settings {
             escape_reach: s.escape.reach,
             escape_seed: s.escape.seed,
             escape_searches: s.escape.searches,
+            saturation: s.law.saturation,
         }
     }
 }
@@ -152,6 +153,7 @@ impl From<Settings> for capp_core::Settings {
                 orientation_scale: s.orientation_scale,
                 approach_radius: s.approach_radius,
                 damping: s.damping,
+                saturation: s.saturation,
             },
             avoidance: AvoidanceSettings {
                 joint_margin: s.joint_margin,

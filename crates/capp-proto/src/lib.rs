@@ -37,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 4;
+pub const VERSION: u8 = 5;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -177,6 +177,9 @@ pub struct Settings {
     pub escape_seed: u32,
     /// Searches for a path per waypoint, before walking (0: none; since version 4).
     pub escape_searches: u8,
+    /// Whether the damped law spends every usable joint's rate limit when a
+    /// step is rate-limited (saturation in the null space; since version 5).
+    pub saturation: bool,
 }
 
 /// The listing's setpoint rule (`joints.dat`): a setpoint whenever the

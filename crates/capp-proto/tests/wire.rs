@@ -174,7 +174,7 @@ fn every_command_is_pinned() {
         points_per_link: 1,
         influence_distance: 24.0,
         engage_clearance: 1.0,
-        advance_fraction: 0.5,
+        advance_fraction: 1.0,
         damping: 1.0e-3,
         max_steps: 20_000,
         stall_window: 400,
@@ -186,6 +186,7 @@ fn every_command_is_pinned() {
         escape_reach: 0.5,
         escape_seed: 0x2545_F491,
         escape_searches: 4,
+        saturation: true,
     };
     check(
         &Command::Settings(settings),
@@ -204,7 +205,7 @@ fn every_command_is_pinned() {
             0x01, // points_per_link
             0x00, 0x00, 0xC0, 0x41, // 24.0
             0x00, 0x00, 0x80, 0x3F, // 1.0
-            0x00, 0x00, 0x00, 0x3F, // 0.5
+            0x00, 0x00, 0x80, 0x3F, // 1.0
             0x6F, 0x12, 0x83, 0x3A, // 0.001
             0xA0, 0x9C, 0x01, // 20000
             0x90, 0x03, // 400
@@ -216,6 +217,7 @@ fn every_command_is_pinned() {
             0x00, 0x00, 0x00, 0x3F, // 0.5
             0x91, 0xE9, 0x97, 0xAA, 0x02, // 0x2545F491
             0x04, // escape_searches 4
+            0x01, // saturation
         ],
     );
     #[cfg(feature = "core")]

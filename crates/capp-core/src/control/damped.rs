@@ -71,6 +71,7 @@
 //!   shortens `h` by conservative advancement ([`crate::step_size`]) and
 //!   accepts a step only if it is clear and, unprojected, lowers `V`.
 
+use crate::control::saturation::{saturate, Problem, SaturationWorkspace};
 use crate::control::{joint_weight, time_at_limits, Drive, LawSettings, PoseError};
 use crate::kinematics::Frames;
 use crate::linalg::{factor, solve, Sym6, Vec6};
@@ -94,6 +95,8 @@ pub struct DampedWorkspace<const N: usize> {
     drive: [f32; N],
     /// `L D L^T` factor of `J M J^T + mu Lambda^-1`.
     factor: Sym6,
+    /// Buffers of saturation in the null space.
+    saturation: SaturationWorkspace<N>,
 }
 
 impl<const N: usize> Default for DampedWorkspace<N> {
@@ -103,6 +106,7 @@ impl<const N: usize> Default for DampedWorkspace<N> {
             metric: [0.0; N],
             drive: [0.0; N],
             factor: [[0.0; 6]; 6],
+            saturation: SaturationWorkspace::default(),
         }
     }
 }
@@ -116,11 +120,13 @@ impl<const N: usize> DampedWorkspace<N> {
             metric,
             drive,
             factor,
+            saturation,
         } = self;
         columns.fill([0.0; 6]);
         metric.fill(0.0);
         drive.fill(0.0);
         factor.fill([0.0; 6]);
+        saturation.clear();
     }
 }
 
@@ -335,9 +341,20 @@ pub fn damped_rate<const N: usize>(
     if !(mu > 0.0 && mu.is_finite()) {
         return idle(rate);
     }
+    // D = mu Lambda^-1 (unit damping on unused angular rows).
+    let angular_damping = if w_o == 0.0 { mu } else { mu / w_o };
+    let damping = [
+        mu,
+        mu,
+        mu,
+        angular_damping,
+        angular_damping,
+        angular_damping,
+    ];
     for (r, row) in a.iter_mut().enumerate() {
-        row[r] += if r < 3 || w_o == 0.0 { mu } else { mu / w_o };
+        row[r] += damping[r];
     }
+    let system = a;
     if !factor(&mut a) {
         return idle(rate);
     }
@@ -346,7 +363,8 @@ pub fn damped_rate<const N: usize>(
     // dq* = M J^T y, (J M J^T + mu Lambda^-1) y = eps. Toward the rotation
     // vector, unless that is not a descent direction for V (it always is
     // undamped); then toward sigma / 2, the exact Gauss-Newton step on V.
-    let mut y = eps;
+    let mut rhs = eps;
+    let mut y = rhs;
     solve(&ws.factor, &mut y);
     let mut descent = 0.0f32;
     for (((r, column), &m), &g) in rate
@@ -359,7 +377,8 @@ pub fn damped_rate<const N: usize>(
         descent += g * *r;
     }
     if (descent <= 0.0 || descent.is_nan()) && error.has_orientation {
-        let mut y = six(error.e[3], sigma_half);
+        rhs = six(error.e[3], sigma_half);
+        let mut y = rhs;
         solve(&ws.factor, &mut y);
         for ((r, column), &m) in rate.iter_mut().zip(&ws.columns).zip(&ws.metric) {
             *r = m * dot6(column, &y);
@@ -369,8 +388,25 @@ pub fn damped_rate<const N: usize>(
     // One-sided projection in the metric of the damped problem; the final
     // approach (the rest within a few steps at the rate limits) may come
     // closer.
-    let unconstrained_time = time_at_limits(robot, rate);
+    let mut unconstrained_time = time_at_limits(robot, rate);
     let final_approach = unconstrained_time <= FINAL_APPROACH_STEPS * time_step_s;
+
+    // More than a step's motion: every joint the task can use at its limit
+    // (saturation in the null space), not only the most loaded one.
+    if law.saturation && unconstrained_time > time_step_s {
+        let problem = Problem {
+            columns: &ws.columns,
+            metric: &ws.metric,
+            system: &system,
+            damping,
+            weights: [1.0, 1.0, 1.0, w_o, w_o, w_o],
+            eps: rhs,
+            rows: if error.has_orientation { 6 } else { 3 },
+        };
+        if saturate(robot, &problem, q, time_step_s, &mut ws.saturation, rate).is_some() {
+            unconstrained_time = time_at_limits(robot, rate);
+        }
+    }
     let constrained = project_guard(guard, final_approach, ws, rate);
 
     // Speed: the most loaded joint at its limit, or the whole step in one

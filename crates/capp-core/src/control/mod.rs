@@ -49,6 +49,7 @@
 pub mod damped;
 pub mod first_order;
 pub mod joint_space;
+pub mod saturation;
 
 use crate::kinematics::{end_direction_error, end_point_force, Frames};
 use crate::math::{dot_slice, max, min, norm_slice, Mat3, Vec3};
@@ -153,6 +154,10 @@ pub struct LawSettings {
     /// damping is `(b + V / L^2)` times the mean eigenvalue of `J M J^T`
     /// (see [`damped`]), so task directions weaker than that are damped.
     pub damping: f32,
+    /// Whether the damped law spends the rate limits of every joint the
+    /// task can use when a step is rate-limited (saturation in the null
+    /// space, [`saturation`]); `false` scales the step uniformly.
+    pub saturation: bool,
 }
 
 impl Default for LawSettings {
@@ -162,6 +167,7 @@ impl Default for LawSettings {
             orientation_scale: 10.0,
             approach_radius: 2.0,
             damping: 1.0e-3,
+            saturation: true,
         }
     }
 }
