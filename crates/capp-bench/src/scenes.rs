@@ -443,7 +443,7 @@ fn chain_start(j: usize) -> f32 {
 
 /// Target configuration of joint `j` (its pose is the target).
 fn chain_goal(j: usize) -> f32 {
-    chain_start(j) + 0.5 * libm::sinf(1.3 * j as f32 + 0.5)
+    chain_start(j) + 1.0 * libm::sinf(1.3 * j as f32 + 0.5)
 }
 
 /// A chain of `joints` (2 to 32) revolute joints with `obstacles` (at most 64)

@@ -65,6 +65,33 @@ pub fn solve(f: &Sym6, b: &mut Vec6) {
     }
 }
 
+/// Updates the factor `f` of `A` ([`factor`]) in place to the factor of
+/// `A + alpha v v^T`, in O(36) (Gill, Golub, Murray and Saunders, "Methods
+/// for modifying matrix factorizations", 1974, method C1); a negative
+/// `alpha` removes a term (a downdate). Returns `false`, leaving `f` partly
+/// updated, when a pivot would not stay positive and finite (the result would
+/// not be positive definite, or rounding made it look so).
+pub fn update(f: &mut Sym6, alpha: f32, v: &Vec6) -> bool {
+    let mut w = *v;
+    let mut alpha = alpha;
+    for j in 0..6 {
+        let p = w[j];
+        let d = f[j][j];
+        let updated = d + alpha * p * p;
+        if !(updated > 0.0 && updated.is_finite()) {
+            return false;
+        }
+        let beta = p * alpha / updated;
+        alpha *= d / updated;
+        f[j][j] = updated;
+        for i in j + 1..6 {
+            w[i] -= p * f[i][j];
+            f[i][j] += beta * w[i];
+        }
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -85,6 +112,40 @@ mod tests {
             a[i][i] += 1.0;
         }
         a
+    }
+
+    #[test]
+    fn a_rank_one_update_or_downdate_gives_the_factor_of_the_changed_matrix() {
+        let a = spd();
+        let v = [0.7, -1.2, 0.4, 2.0, -0.3, 1.1];
+        for alpha in [2.5f32, -0.05] {
+            let mut changed = a;
+            for i in 0..6 {
+                for j in 0..6 {
+                    changed[i][j] += alpha * v[i] * v[j];
+                }
+            }
+            let mut direct = changed;
+            assert!(factor(&mut direct));
+            let mut updated = a;
+            assert!(factor(&mut updated));
+            assert!(update(&mut updated, alpha, &v));
+            for i in 0..6 {
+                for j in 0..=i {
+                    let scale = direct[i][i].abs().max(1.0);
+                    assert!(
+                        (updated[i][j] - direct[i][j]).abs() < 1e-4 * scale,
+                        "alpha {alpha}: [{i}][{j}] {} vs {}",
+                        updated[i][j],
+                        direct[i][j]
+                    );
+                }
+            }
+        }
+        // Removing more than is there: refused, not a wrong factor.
+        let mut f = a;
+        assert!(factor(&mut f));
+        assert!(!update(&mut f, -1.0e4, &v));
     }
 
     #[test]

@@ -24,8 +24,13 @@ pub fn variants() -> Vec<Variant> {
     vec![
         Variant {
             name: "damped",
-            description: "the defaults: damped least squares (`LawKind::DampedLeastSquares`), projection engaged near contact (C - 1 < 1)",
+            description: "the defaults: damped least squares (`LawKind::DampedLeastSquares`) with saturation in the null space, projection engaged near contact (C - 1 < 1)",
             settings: "",
+        },
+        Variant {
+            name: "uniform",
+            description: "the default law with each rate-limited step scaled uniformly into the rate limits, only its most loaded joint at its limit (`saturation = false`)",
+            settings: "saturation = false",
         },
         Variant {
             name: "gradient",

@@ -354,7 +354,6 @@ pub fn damped_rate<const N: usize>(
     for (r, row) in a.iter_mut().enumerate() {
         row[r] += damping[r];
     }
-    let system = a;
     if !factor(&mut a) {
         return idle(rate);
     }
@@ -378,7 +377,7 @@ pub fn damped_rate<const N: usize>(
     }
     if (descent <= 0.0 || descent.is_nan()) && error.has_orientation {
         rhs = six(error.e[3], sigma_half);
-        let mut y = rhs;
+        y = rhs;
         solve(&ws.factor, &mut y);
         for ((r, column), &m) in rate.iter_mut().zip(&ws.columns).zip(&ws.metric) {
             *r = m * dot6(column, &y);
@@ -397,10 +396,11 @@ pub fn damped_rate<const N: usize>(
         let problem = Problem {
             columns: &ws.columns,
             metric: &ws.metric,
-            system: &system,
+            factor: &ws.factor,
             damping,
             weights: [1.0, 1.0, 1.0, w_o, w_o, w_o],
             eps: rhs,
+            y,
             rows: if error.has_orientation { 6 } else { 3 },
         };
         if saturate(robot, &problem, q, time_step_s, &mut ws.saturation, rate).is_some() {

@@ -29,8 +29,10 @@
 //!
 //! measured in eq. 12's weights `Lambda`. The first candidate (nothing held)
 //! is the uniform scaling itself, so the result never leaves more error than
-//! it. Each round is one 6 x 6 factorisation and O(n); at most `n - 2 m`
-//! joints are held (`m` task rows): an arm with less redundancy than that
+//! it. Holding a joint removes its term from `A_W`, a rank-one downdate of
+//! the law's own `L D L^T` factor (O(36), [`crate::linalg::update`]); each
+//! round is then two 6 x 6 solves and one pass over the joints. At most
+//! [`MOST_HELD`] joints are held, and never more than `n - 2 m` (`m` task rows): an arm with less redundancy than that
 //! (a 7-joint arm for a pose, a 3-joint planar arm for a point) keeps the
 //! uniform scaling, whose straight task-space step its few free joints could
 //! not improve on without turning the end effector off its line.
@@ -40,8 +42,14 @@
 //! `dq*`, and `(dq / s) s = dq` is what one step moves when nothing else cuts
 //! it.
 
-use crate::linalg::{factor, solve, Sym6, Vec6};
+use crate::linalg::{solve, update, Sym6, Vec6};
+use crate::math::{max, min};
 use crate::robot::Robot;
+
+/// Most joints held in one step: each costs a 6 x 6 factorisation and a
+/// pass over the joints (about 1 500 Cortex-M4F instructions for PIPS), and
+/// the first few give most of the gain (PLANNING.md).
+pub const MOST_HELD: usize = 4;
 
 /// Buffers of [`saturate`], sized once for `N` joints.
 #[derive(Clone, Debug)]
@@ -50,6 +58,10 @@ pub struct SaturationWorkspace<const N: usize> {
     free: [bool; N],
     /// The displacement of held joints (`q_N`), 0 for free ones.
     held: [f32; N],
+    /// This step's bounds of each joint's displacement: rate and joint limits.
+    lower: [f32; N],
+    /// See `lower`.
+    upper: [f32; N],
     /// `a` of the current round (free joints).
     task: [f32; N],
     /// `b` of the current round.
@@ -63,6 +75,8 @@ impl<const N: usize> Default for SaturationWorkspace<N> {
         SaturationWorkspace {
             free: [true; N],
             held: [0.0; N],
+            lower: [0.0; N],
+            upper: [0.0; N],
             task: [0.0; N],
             compensation: [0.0; N],
             best: [0.0; N],
@@ -77,12 +91,16 @@ impl<const N: usize> SaturationWorkspace<N> {
         let SaturationWorkspace {
             free,
             held,
+            lower,
+            upper,
             task,
             compensation,
             best,
         } = self;
         free.fill(true);
         held.fill(0.0);
+        lower.fill(0.0);
+        upper.fill(0.0);
         task.fill(0.0);
         compensation.fill(0.0);
         best.fill(0.0);
@@ -90,22 +108,24 @@ impl<const N: usize> SaturationWorkspace<N> {
 }
 
 /// The damped problem [`saturate`] rebalances: `J` by columns, the metric,
-/// `A = J M J^T + D` before factorisation (lower triangle), the damping `D`,
-/// `Lambda`'s weights and the error `eps` the step was solved for.
+/// the factor of `A = J M J^T + D`, the damping `D`, `Lambda`'s weights, the
+/// error `eps` the step was solved for and the law's solution `A^-1 eps`.
 #[derive(Clone, Copy, Debug)]
 pub struct Problem<'a, const N: usize> {
     /// Task columns `J_j` (six rows; unused rows zero).
     pub columns: &'a [Vec6; N],
     /// `M_jj`.
     pub metric: &'a [f32; N],
-    /// `J M J^T + D`, lower triangle, not factorised.
-    pub system: &'a Sym6,
+    /// The `L D L^T` factor of `J M J^T + D` ([`crate::linalg::factor`]).
+    pub factor: &'a Sym6,
     /// The diagonal of `D = mu Lambda^-1`.
     pub damping: Vec6,
     /// The diagonal of `Lambda` (eq. 12's weights; 0 for unused rows).
     pub weights: Vec6,
     /// The error the step removes.
     pub eps: Vec6,
+    /// `A^-1 eps`, the law's own solve (`dq* = M J^T y`).
+    pub y: Vec6,
     /// Task rows in use (3: position only; 6: pose).
     pub rows: usize,
 }
@@ -142,70 +162,79 @@ pub fn saturate<const N: usize>(
     let joints = robot.joints().get(..n)?;
     let (q, dq) = (q.get(..n)?, dq.get_mut(..n)?);
     // Joints that may be held while twice the task's rows stay free.
-    let holdable = n.checked_sub(2 * problem.rows)?;
+    let holdable = n.checked_sub(2 * problem.rows)?.min(MOST_HELD);
     if holdable == 0 {
         return None;
     }
-    ws.free[..n].fill(true);
-    ws.held[..n].fill(0.0);
-    let bounds = |j: usize| -> (f32, f32) {
-        match (joints.get(j), q.get(j)) {
-            (Some(joint), Some(&qj)) => {
-                let step = joint.max_rate * time_step_s;
-                (
-                    crate::math::max(-step, joint.min - qj),
-                    crate::math::min(step, joint.max - qj),
-                )
-            }
-            _ => (0.0, 0.0),
-        }
-    };
-    let mut system = *problem.system;
+    // Round 0 holds nothing: a = dq*, b = 0, y_a = y.
+    for ((((((joint, &qj), &d), free), held), (lower, upper)), (task, compensation)) in joints
+        .iter()
+        .zip(q)
+        .zip(dq.iter())
+        .zip(ws.free.iter_mut())
+        .zip(ws.held.iter_mut())
+        .zip(ws.lower.iter_mut().zip(ws.upper.iter_mut()))
+        .zip(ws.task.iter_mut().zip(ws.compensation.iter_mut()))
+    {
+        let step = joint.max_rate * time_step_s;
+        *lower = max(-step, joint.min - qj);
+        *upper = min(step, joint.max - qj);
+        *free = true;
+        *held = 0.0;
+        *task = d;
+        *compensation = 0.0;
+    }
+    let mut f = *problem.factor;
+    let (mut ya, mut yb) = (problem.y, [0.0f32; 6]);
     // J q_N, kept as joints are held.
     let mut moved: Vec6 = [0.0; 6];
     let mut best: Option<(f32, Saturation)> = None;
+    let (free, held) = (&mut ws.free[..n], &mut ws.held[..n]);
+    let (lower, upper) = (&ws.lower[..n], &ws.upper[..n]);
+    let (task, compensation) = (&mut ws.task[..n], &mut ws.compensation[..n]);
+    let (columns, metric) = (&problem.columns[..n], &problem.metric[..n]);
     for round in 0..=holdable {
-        let mut f = system;
-        if !factor(&mut f) {
-            break;
+        if round > 0 {
+            ya = problem.eps;
+            solve(&f, &mut ya);
+            yb = moved;
+            solve(&f, &mut yb);
         }
-        let mut ya = problem.eps;
-        solve(&f, &mut ya);
-        let mut yb = moved;
-        solve(&f, &mut yb);
-        // a, b and the largest scale that keeps every free joint in bounds.
+        // a and b of the free joints (round 0: already there), the largest
+        // scale that keeps every free joint within its bounds, and the joint
+        // that sets it.
         let mut scale = 1.0f32;
         let mut critical = None;
-        for (j, ((((column, &m), &free), task), compensation)) in problem
-            .columns
+        for (j, ((((column, &m), &free), (task, compensation)), (&lower, &upper))) in columns
             .iter()
-            .zip(problem.metric)
-            .zip(&ws.free)
-            .zip(ws.task.iter_mut())
-            .zip(ws.compensation.iter_mut())
-            .take(n)
+            .zip(metric)
+            .zip(free.iter())
+            .zip(task.iter_mut().zip(compensation.iter_mut()))
+            .zip(lower.iter().zip(upper))
             .enumerate()
         {
             if !free {
                 continue;
             }
-            *task = m * dot6(column, &ya);
-            *compensation = -m * dot6(column, &yb);
-            let (lower, upper) = bounds(j);
-            let bound = if *task > 0.0 {
+            if round > 0 {
+                *task = m * dot6(column, &ya);
+                *compensation = -m * dot6(column, &yb);
+            }
+            let (t, c) = (*task, *compensation);
+            let bound = if t > 0.0 {
                 upper
-            } else if *task < 0.0 {
+            } else if t < 0.0 {
                 lower
             } else {
                 continue;
             };
-            let limit = (bound - *compensation) / *task;
+            let limit = (bound - c) / t;
             if limit < scale {
                 scale = limit;
                 critical = Some((j, bound));
             }
         }
-        let scale = crate::math::max(scale, 0.0);
+        let scale = max(scale, 0.0);
         // The error this candidate leaves, in Lambda's weights.
         let mut left = 0.0f32;
         for i in 0..6 {
@@ -215,7 +244,7 @@ pub fn saturate<const N: usize>(
         if !left.is_finite() {
             break;
         }
-        if best.is_none_or(|(b, _)| left < b) && scale > 0.0 {
+        if scale > 0.0 && best.is_none_or(|(b, _)| left < b) {
             best = Some((
                 left,
                 Saturation {
@@ -223,11 +252,17 @@ pub fn saturate<const N: usize>(
                     scale,
                 },
             ));
-            for (j, out) in ws.best.iter_mut().take(n).enumerate() {
-                *out = if ws.free[j] {
-                    scale * ws.task[j] + ws.compensation[j]
+            for ((((out, &free), &task), &compensation), &held) in ws.best[..n]
+                .iter_mut()
+                .zip(free.iter())
+                .zip(task.iter())
+                .zip(compensation.iter())
+                .zip(held.iter())
+            {
+                *out = if free {
+                    scale * task + compensation
                 } else {
-                    ws.held[j]
+                    held
                 };
             }
         }
@@ -238,21 +273,22 @@ pub fn saturate<const N: usize>(
             break;
         }
         // Hold the critical joint at the bound it reached.
-        let (Some(free), Some(held), Some(column), Some(&m)) = (
-            ws.free.get_mut(c),
-            ws.held.get_mut(c),
-            problem.columns.get(c),
-            problem.metric.get(c),
+        let (Some(flag), Some(h), Some(column), Some(&m)) = (
+            free.get_mut(c),
+            held.get_mut(c),
+            columns.get(c),
+            metric.get(c),
         ) else {
             break;
         };
-        *free = false;
-        *held = value;
-        for r in 0..6 {
-            moved[r] += column[r] * value;
-            for k in 0..=r {
-                system[r][k] -= m * column[r] * column[k];
-            }
+        // A_W loses the held joint's term: a rank-one downdate of its factor.
+        if !update(&mut f, -m, column) {
+            break;
+        }
+        *flag = false;
+        *h = value;
+        for (moved, &x) in moved.iter_mut().zip(column) {
+            *moved += x * value;
         }
     }
     let (_, chosen) = best?;
