@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 04 00 01, CRC-32 0x8f4f4158 (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 05 00 01, CRC-32 0x8e8d2b6f (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x04, 0x06, 0x01, 0x58, 0x41, 0x4f, 0x8f, 0x00]
+        &[0x02, 0x05, 0x06, 0x01, 0x6f, 0x2b, 0x8d, 0x8e, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x04, 0x01, 0x08, 0xbd, 0xc8, 0x88, 0xef, 0x00]
+        &[0x08, 0x05, 0x01, 0x08, 0x8a, 0xa2, 0x4a, 0xee, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x04, 0x02, 0xff, 0x01, 0xff, 0x77, 0x73, 0x2a, 0x13, 0x00]
+        &[0x0a, 0x05, 0x02, 0xff, 0x01, 0xff, 0xc7, 0x5a, 0x4a, 0x2e, 0x00]
     );
 }
 
@@ -273,7 +273,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x04, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x05, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -429,8 +429,13 @@ fn the_largest_messages_fit_a_frame() {
 }
 
 fn raw_frame(body: &[u8]) -> Vec<u8> {
+    framed_with_crc(body, crc::crc32(body))
+}
+
+/// `body` and the CRC-32 `crc`, COBS-encoded and terminated.
+fn framed_with_crc(body: &[u8], crc: u32) -> Vec<u8> {
     let mut b = body.to_vec();
-    b.extend_from_slice(&crc::crc32(body).to_le_bytes());
+    b.extend_from_slice(&crc.to_le_bytes());
     let mut out = vec![0u8; cobs::max_encoded_len(b.len())];
     let n = cobs::encode(&b, &mut out).unwrap();
     out.truncate(n);
@@ -440,19 +445,18 @@ fn raw_frame(body: &[u8]) -> Vec<u8> {
 
 #[test]
 fn bad_frames_are_reported_not_decoded() {
-    let mut f = [0u8; MAX_FRAME];
-    let n = encode(
-        &Command::Run {
-            every: 1,
-            error_change: None,
-        },
-        &mut f,
-    )
-    .unwrap();
-    // CRC: flip a bit of the CRC (a non-code byte).
-    let mut bad = f;
-    bad[n - 2] ^= 0x01;
-    assert_eq!(decode::<Command>(&mut bad[..n - 1]), Err(FrameError::Crc));
+    // CRC: a whole Run frame whose CRC has one bit flipped.
+    let run = Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    let body = cat(&[&[VERSION], &payload(&run)]);
+    let mut bad = framed_with_crc(&body, crc::crc32(&body) ^ 0x0100);
+    let l = bad.len() - 1;
+    assert_eq!(decode::<Command>(&mut bad[..l]), Err(FrameError::Crc));
+    let mut good = raw_frame(&body);
+    let l = good.len() - 1;
+    assert_eq!(decode::<Command>(&mut good[..l]), Ok(run));
     // Version.
     let mut v1 = raw_frame(&[1, 0x08, 0x01, 0x00]);
     let l = v1.len() - 1;

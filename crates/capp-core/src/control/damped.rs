@@ -67,9 +67,16 @@
 //!   the most loaded joint runs at its limit along the linearised path.
 //!   Shorter: the whole step is taken in `h` (`rate = dq / h`), and the error
 //!   falls by the Gauss-Newton factor each step: a short geometric approach.
-//!   Either way the rate is a uniform scaling of `dq`, and the planner then
-//!   shortens `h` by conservative advancement ([`crate::step_size`]) and
-//!   accepts a step only if it is clear and, unprojected, lowers `V`.
+//!   The planner then shortens `h` by conservative advancement
+//!   ([`crate::step_size`]) and accepts a step only if it is clear and,
+//!   unprojected, lowers `V`.
+//! * **Saturation** ([`crate::control::saturation`], on by default): a
+//!   uniform scaling runs only the most loaded joint at its limit. When the
+//!   step needs more than `h` and the arm has more than twice as many joints
+//!   as task rows, `dq*` is replaced, before the projection, by the step
+//!   that holds the joints that would overrun at their bounds and gives the
+//!   rest of the task to the free joints (the candidate that leaves the
+//!   least error in `Lambda`, never more than the uniform scaling).
 
 use crate::control::saturation::{saturate, Problem, SaturationWorkspace};
 use crate::control::{joint_weight, time_at_limits, Drive, LawSettings, PoseError};

@@ -32,8 +32,9 @@
 //! it. Holding a joint removes its term from `A_W`, a rank-one downdate of
 //! the law's own `L D L^T` factor (O(36), [`crate::linalg::update`]); each
 //! round is then two 6 x 6 solves and one pass over the joints. At most
-//! [`MOST_HELD`] joints are held, and never more than `n - 2 m` (`m` task rows): an arm with less redundancy than that
-//! (a 7-joint arm for a pose, a 3-joint planar arm for a point) keeps the
+//! [`MOST_HELD`] joints are held, and never more than `n - 2 m` (`m`
+//! task rows): an arm with no more than twice as many joints as rows (a
+//! 7-joint arm for a pose, a 3-joint planar arm for a point) keeps the
 //! uniform scaling, whose straight task-space step its few free joints could
 //! not improve on without turning the end effector off its line.
 //!
@@ -46,9 +47,12 @@ use crate::linalg::{solve, update, Sym6, Vec6};
 use crate::math::{max, min};
 use crate::robot::Robot;
 
-/// Most joints held in one step: each costs a 6 x 6 factorisation and a
-/// pass over the joints (about 1 500 Cortex-M4F instructions for PIPS), and
-/// the first few give most of the gain (PLANNING.md).
+/// Most joints held in one step: each round costs a rank-one downdate, two
+/// 6 x 6 solves and a pass over the joints (on the Cortex-M4F a PIPS step
+/// with 8 obstacles takes 46 600 instructions with saturation, 38 166
+/// without: BENCHMARKS.md), and the first few give most of the gain (median
+/// PIPS motion time over the suite's cases: 8.5 s for uniform scaling, 6.05 s
+/// holding at most 2 joints, 5.3 s at most 4, 4.95 s at most 6).
 pub const MOST_HELD: usize = 4;
 
 /// Buffers of [`saturate`], sized once for `N` joints.
