@@ -95,7 +95,7 @@ fn the_listings_input_dat_planned_on_the_board_is_the_host_plan() {
     assert!(n > 5, "{n} setpoints");
 }
 
-/// Issue 13's dead end on the board: the law alone stalls against the bracket
+/// Issue 13's dead end on the board: the law alone stalls against the box
 /// (host-sim's scenario tests show it), the board's own escape detours round
 /// it, and the plan it streams is the host's to the bit and reaches the target.
 #[test]

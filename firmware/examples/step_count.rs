@@ -412,7 +412,7 @@ fn main() -> ! {
         match scene {
             Ok(scene) => {
                 escape_costs(name, &scene, overhead);
-                // The bracket of pips_escape, the wall of pips_dead_end.
+                // The box of pips_escape, the wall of pips_dead_end.
                 let blocking = scene.scenario.obstacles().len() as u8 - 1;
                 stall_costs(name, &scene, blocking);
             }

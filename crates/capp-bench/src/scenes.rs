@@ -262,113 +262,92 @@ fn pips_with(obstacles: usize, settings: Settings) -> Result<Scene<PIPS_JOINTS>,
 
 /// Start configuration of `pips_escape.toml` (radians, inches).
 pub const ESCAPE_START: [f32; PIPS_JOINTS] = [
-    1.7488767,
-    0.91875106,
-    26.189531,
-    4.790437,
-    9.321205,
-    0.044500794,
-    -0.2977069,
-    -0.1940957,
-    0.36832595,
-    -0.14385386,
-    0.23510557,
-    -0.15288553,
-    -0.2383629,
-    0.4276852,
-    -0.47850445,
-    -0.11956917,
-    0.85759807,
-    -2.0284657,
+    -1.6832609,
+    1.0917926,
+    15.179916,
+    6.093105,
+    2.0797715,
+    -0.14854138,
+    -0.5489637,
+    -0.22456053,
+    -0.32395813,
+    -0.2730467,
+    0.4145076,
+    0.13431841,
+    -0.10170754,
+    0.5062611,
+    -0.43130675,
+    0.2986523,
+    2.1118379,
+    -1.8190794,
 ];
 
 /// Target of `pips_escape.toml`: position (inches) and orientation rows.
 pub const ESCAPE_TARGET: ([f32; 3], [[f32; 3]; 3]) = (
-    [43.499966, 86.26843, 74.77125],
+    [-39.453037, -52.63705, 85.17095],
     [
-        [-0.3671241, -0.9034126, -0.2215076],
-        [-0.8774934, 0.41537136, -0.23973325],
-        [0.30858594, 0.10635959, -0.9452314],
+        [-0.7504836, 0.63740444, 0.17461392],
+        [0.6010404, 0.7681348, -0.22072454],
+        [-0.27481782, -0.060700104, -0.9595784],
     ],
 );
 
 /// The obstacles of `pips_escape.toml`, in its order.
-pub fn escape_obstacles() -> [SuperEllipsoid; 10] {
+pub fn escape_obstacles() -> [SuperEllipsoid; 7] {
     [
         // bay floor
         SuperEllipsoid {
-            centre: [60.0, 50.0, -21.781511],
+            centre: [60.0, 50.0, -18.704313],
             semi_axes: [250.0, 250.0, 10.0],
             exponents: [8.0, 8.0, 8.0],
             euler_123: [0.0; 3],
         },
         // aft bulkhead
         SuperEllipsoid {
-            centre: [162.85605, 50.0, 40.0],
+            centre: [163.18277, 50.0, 40.0],
             semi_axes: [10.0, 250.0, 250.0],
-            exponents: [8.0, 8.0, 8.0],
-            euler_123: [0.0; 3],
-        },
-        // forward bulkhead
-        SuperEllipsoid {
-            centre: [-42.22014, 50.0, 40.0],
-            semi_axes: [10.0, 250.0, 250.0],
-            exponents: [8.0, 8.0, 8.0],
-            euler_123: [0.0; 3],
-        },
-        // port wall
-        SuperEllipsoid {
-            centre: [60.0, -41.317497, 40.0],
-            semi_axes: [250.0, 5.0, 250.0],
-            exponents: [8.0, 8.0, 8.0],
-            euler_123: [0.0; 3],
-        },
-        // starboard wall
-        SuperEllipsoid {
-            centre: [60.0, 130.95128, 40.0],
-            semi_axes: [250.0, 5.0, 250.0],
             exponents: [8.0, 8.0, 8.0],
             euler_123: [0.0; 3],
         },
         // payload 1
         SuperEllipsoid {
-            centre: [81.53505, 43.918125, 28.460999],
-            semi_axes: [21.078968, 18.533928, 18.533928],
+            centre: [42.630444, 41.290623, 22.82558],
+            semi_axes: [29.411991, 12.669356, 12.669356],
             exponents: [8.0, 2.0, 2.0],
             euler_123: [0.0; 3],
         },
         // payload 2
         SuperEllipsoid {
-            centre: [73.37061, 29.80678, 23.493156],
-            semi_axes: [21.355688, 17.077408, 17.077408],
+            centre: [63.17576, 44.907036, 33.079994],
+            semi_axes: [27.14336, 18.073282, 18.073282],
             exponents: [8.0, 2.0, 2.0],
             euler_123: [0.0; 3],
         },
         // equipment 1
         SuperEllipsoid {
-            centre: [137.65631, 47.02806, -6.9111066],
-            semi_axes: [9.947951, 6.965582, 4.870404],
+            centre: [113.51032, 67.19522, -0.059413668],
+            semi_axes: [7.024546, 9.962389, 8.644899],
             exponents: [8.0, 8.0, 8.0],
             euler_123: [0.0; 3],
         },
-        // bracket near the base
+        // bracket
         SuperEllipsoid {
-            centre: [8.822459, 28.75585, 9.731408],
-            semi_axes: [2.1211357, 2.431463, 3.7460725],
+            centre: [-34.856926, -68.290985, 50.455906],
+            semi_axes: [2.4768205, 1.8619685, 2.5057402],
             exponents: [8.0, 8.0, 8.0],
             euler_123: [0.0; 3],
         },
-        // bracket (in the way)
+        // box (in the way)
         SuperEllipsoid {
-            centre: [50.565792, 94.06789, 67.39671],
-            semi_axes: [3.1109095, 3.7510293, 1.4753368],
+            centre: [-35.09874, -74.08408, 87.66051],
+            semi_axes: [6.9067373, 7.884667, 5.923332],
             exponents: [8.0, 8.0, 8.0],
             euler_123: [0.0; 3],
         },
     ]
 }
 
-/// `host-sim/scenarios/pips_escape.toml`: a dead end (a bracket on the
+/// `host-sim/scenarios/pips_escape.toml`: a dead end (a box on the
 /// end-effector path) the planner escapes by a detour, then reaches.
 pub fn pips_escape() -> Result<Scene<PIPS_JOINTS>, SceneError> {
     pips_scene(
