@@ -373,7 +373,7 @@ impl<const N: usize> Planner<N> {
             evals: Evaluations::new(),
             q_next: [0.0; N],
             rate: [0.0; N],
-            law: LawWorkspace::for_kind(LawKind::DampedLeastSquares),
+            law: LawWorkspace::default(),
             escape: Escape::new(0, &[]),
             step: 0,
             phase: Phase::Done(Outcome::Stalled),
@@ -437,10 +437,6 @@ impl<const N: usize> Planner<N> {
             return Err(StartError::OutsideLimits { joint: joint as u8 });
         }
         self.reset(start);
-        let kind = scenario.settings().law.kind;
-        if !self.law.suits(kind) {
-            self.law.reset(kind);
-        }
         self.escape.reset(scenario.settings().escape.seed, start);
         // Scenario::new refuses a mission without waypoints, so this never fails.
         let Some(&target) = scenario.targets().first() else {
@@ -784,11 +780,6 @@ impl<const N: usize> Planner<N> {
             self.evals.now().field.clearance.map(|c| c.value),
             settings.avoidance.engage_clearance,
         );
-        if !self.law.suits(settings.law.kind) {
-            // Another scenario's law than the last step's (a bench, a caller
-            // switching): fresh buffers for it.
-            self.law.reset(settings.law.kind);
-        }
         let guard = Guard::at(
             &self.evals.now().mu[..n],
             self.evals.now().field.clearance.map(|c| c.value),
@@ -803,7 +794,7 @@ impl<const N: usize> Planner<N> {
             (None, Some(k)) => scenario.joint_goal(k),
             (None, None) => None,
         };
-        let (drive, constrained, mut h) = match (joint_goal, &mut self.law) {
+        let (drive, constrained, mut h) = match (joint_goal, settings.law.kind) {
             (Some(goal), _) => {
                 let step = joint_rate(
                     robot,
@@ -815,7 +806,7 @@ impl<const N: usize> Planner<N> {
                 );
                 (step.drive, step.constrained, settings.time_step_s)
             }
-            (None, LawWorkspace::FirstOrder(ws)) => first_order_rate(
+            (None, LawKind::Gradient | LawKind::Paper) => first_order_rate(
                 robot,
                 &self.evals.now().frames,
                 &self.q[..n],
@@ -824,10 +815,10 @@ impl<const N: usize> Planner<N> {
                 engage,
                 &settings,
                 self.error_step,
-                ws,
+                &mut self.law.first_order,
                 &mut self.rate[..n],
             ),
-            (None, LawWorkspace::Damped(ws)) => {
+            (None, LawKind::DampedLeastSquares) => {
                 let step = damped_rate(
                     robot,
                     &self.evals.now().frames,
@@ -836,7 +827,7 @@ impl<const N: usize> Planner<N> {
                     &guard,
                     &settings.law,
                     settings.time_step_s,
-                    ws,
+                    &mut self.law.damped,
                     &mut self.rate[..n],
                 );
                 (step.drive, step.constrained, settings.time_step_s)

@@ -7,7 +7,7 @@
 use super::{Planner, CONTACT_FLOOR};
 use crate::control::damped::damped_rate;
 use crate::control::joint_space::gap;
-use crate::control::{time_at_limits, LawWorkspace, Target};
+use crate::control::{time_at_limits, LawKind, Target};
 use crate::math::all_finite;
 use crate::projection::Guard;
 use crate::scenario::Scenario;
@@ -316,9 +316,12 @@ impl<const N: usize> Planner<N> {
     ) -> f32 {
         let (settings, robot) = (scenario.settings(), scenario.robot());
         let n = self.n.min(N).min(qa.len());
-        let LawWorkspace::Damped(ws) = &mut self.law else {
+        // The search's descents are the damped law's only: under a
+        // first-order law no imagined step is taken (and no goal found).
+        if settings.law.kind != LawKind::DampedLeastSquares {
             return 0.0;
-        };
+        }
+        let ws = &mut self.law.damped;
         let guard = Guard::at(
             &self.evals.next().mu[..n],
             self.evals.next().field.clearance.map(|c| c.value),
