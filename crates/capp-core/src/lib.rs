@@ -16,7 +16,7 @@
 //! | [`kinematics`] | forward kinematics and exact Jacobian-transpose products (eqs. 6, 14) |
 //! | [`obstacle`] | super-ellipsoid obstacles, their inside-outside function and its gradient (eq. 25) |
 //! | [`avoidance`] | avoidance points on the arm, the potential of eq. 26 and its joint-space gradient (eq. 20) |
-//! | [`control`] | the laws that drive the end effector: the Lyapunov law (eqs. 11-15), the gradient law, the joint weighting (eq. 18); [`control::damped`], damped least squares on `V` (the default) |
+//! | [`control`] | the laws that drive the end effector: the Lyapunov law (eqs. 11-15), the gradient law, the joint weighting (eq. 18); [`control::damped`], damped least squares on `V` (the default); [`control::saturation`], how it spends the rate limits of a redundant arm |
 //! | [`linalg`] | the 6 x 6 symmetric positive definite solve the damped law needs |
 //! | [`projection`] | keeping the joint rate orthogonal to the obstacle gradient (eqs. 22-24) |
 //! | [`step_size`] | how long a step is: the listing's rule, its bounds, conservative advancement |

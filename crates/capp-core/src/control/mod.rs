@@ -3,7 +3,9 @@
 //!
 //! * [`LawKind::DampedLeastSquares`] (the default, [`damped`]): a
 //!   Levenberg-Marquardt step on `V` in the metric of the rate limits and eq.
-//!   18, at the joints' speed: tens of steps, unit-invariant;
+//!   18, at the joints' speed: tens of steps, unit-invariant; on a redundant
+//!   arm a rate-limited step is rebalanced by saturation in the null space
+//!   ([`saturation`]);
 //! * [`LawKind::Gradient`] ([`weighted_rate`]): the normalised total gradient,
 //!   a first-order descent on `V`;
 //! * [`LawKind::Paper`] ([`weighted_rate`]): eq. 15 as printed.
