@@ -76,7 +76,8 @@
 //!   as task rows, `dq*` is replaced, before the projection, by the step
 //!   that holds the joints that would overrun at their bounds and gives the
 //!   rest of the task to the free joints (the candidate that leaves the
-//!   least error in `Lambda`, never more than the uniform scaling).
+//!   least error in `Lambda`, never more than the uniform scaling, among
+//!   those that lower `V` no more slowly than it).
 
 use crate::control::saturation::{saturate, Problem, SaturationWorkspace};
 use crate::control::{joint_weight, time_at_limits, Drive, LawSettings, PoseError};

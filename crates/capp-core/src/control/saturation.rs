@@ -29,7 +29,8 @@
 //!
 //! measured in eq. 12's weights `Lambda`. The first candidate (nothing held)
 //! is the uniform scaling itself, so the result never leaves more error than
-//! it. Holding a joint removes its term from `A_W`, a rank-one downdate of
+//! it; a later one counts only if it lowers `V` at least as fast, to first
+//! order (`eps^T Lambda J dq = eps^T Lambda (eps - r)`). Holding a joint removes its term from `A_W`, a rank-one downdate of
 //! the law's own `L D L^T` factor (O(36), [`crate::linalg::update`]); each
 //! round is then two 6 x 6 solves and one pass over the joints. At most
 //! [`MOST_HELD`] joints are held, and never more than `n - 2 m` (`m`
