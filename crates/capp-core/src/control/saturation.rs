@@ -261,7 +261,9 @@ pub fn saturate<const N: usize>(
         // principle turn away from the gradient, and the planner would refuse
         // its steps. A guard: it changed no run of the suite's 1 600 cases
         // (seeds 1-5), nor any case of `tests/saturation.rs`.
-        if scale > 0.0 && descent >= uniform_descent && best.is_none_or(|(b, _)| left < b) {
+        let improved =
+            scale > 0.0 && descent >= uniform_descent && best.is_none_or(|(b, _)| left < b);
+        if improved {
             best = Some((
                 left,
                 Saturation {
@@ -269,6 +271,10 @@ pub fn saturate<const N: usize>(
                     scale,
                 },
             ));
+        }
+        // Round 0 is the uniform scaling, returned as `None` with `dq`
+        // untouched: only a later candidate needs its joints kept.
+        if improved && round > 0 {
             for ((((out, &free), &task), &compensation), &held) in ws.best[..n]
                 .iter_mut()
                 .zip(free.iter())
