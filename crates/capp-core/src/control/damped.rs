@@ -61,7 +61,12 @@
 //!   is projected, with the strength of [`crate::projection::strength`];
 //!   inside the engaged band the step must also move away by
 //!   [`crate::projection::retreat`] (`mu_P . dq <= -retreat`), so sliding
-//!   along a curved surface does not creep closer step by step.
+//!   along a curved surface does not creep closer step by step. Where the
+//!   target itself lies by an obstacle, `mu_P` is nearly in the task's range
+//!   and `K mu_P` is a large null-space motion that the rate limits slow to
+//!   a crawl; the same projection in the joint metric `M` (eq. 24 as the
+//!   paper weights it) is then taken instead, whichever of the two lowers
+//!   `V` faster per second at the rate limits (`project_guard`).
 //! * **Speed**: `T = max_j |dq_j| / qdot_max_j` is the time the step needs at
 //!   the rate limits. Longer than the time step `h`: the rate is `dq / T`, so
 //!   the most loaded joint runs at its limit along the linearised path.
@@ -103,6 +108,9 @@ pub struct DampedWorkspace<const N: usize> {
     drive: [f32; N],
     /// `L D L^T` factor of `J M J^T + mu Lambda^-1`.
     factor: Sym6,
+    /// The step projected in the joint metric `M`, the projection's other
+    /// candidate ([`project_guard`]).
+    joint_metric_step: [f32; N],
     /// Buffers of saturation in the null space.
     saturation: SaturationWorkspace<N>,
 }
@@ -114,6 +122,7 @@ impl<const N: usize> Default for DampedWorkspace<N> {
             metric: [0.0; N],
             drive: [0.0; N],
             factor: [[0.0; 6]; 6],
+            joint_metric_step: [0.0; N],
             saturation: SaturationWorkspace::default(),
         }
     }
@@ -128,12 +137,14 @@ impl<const N: usize> DampedWorkspace<N> {
             metric,
             drive,
             factor,
+            joint_metric_step,
             saturation,
         } = self;
         columns.fill([0.0; 6]);
         metric.fill(0.0);
         drive.fill(0.0);
         factor.fill([0.0; 6]);
+        joint_metric_step.fill(0.0);
         saturation.clear();
     }
 }
@@ -186,12 +197,28 @@ fn apply_metric<const N: usize>(
     }
 }
 
-/// Projects `rate` (the step `dq*`) against `guard` in the metric `K`: the
-/// least change in `K^-1` that brings `g . dq` down to what the guard allows.
+/// Projects `rate` (the step `dq*`) against `guard`: the least change that
+/// brings `g . dq` down to what the guard allows, in whichever of two
+/// metrics makes the step lower `V` faster at the rate limits (the larger
+/// `G . dq / max(T(dq), h)`, `T` the step's time at the limits, `h` the
+/// time step):
+///
+/// * `K`, the damped problem's: `dq* - k K g`. It prefers motion the end
+///   effector does not feel and never stops the descent, but where `g` lies
+///   nearly in the task's range (the target itself is near the obstacle)
+///   the null space has little to give, `g . K g` is small and the
+///   correction is a large null-space motion that the rate limits then
+///   slow to a crawl;
+/// * `M`, the joint metric (eq. 24 with the paper's weighting): `dq* - k M
+///   g`. It gives up some of the task's motion instead, at the joints'
+///   cost.
+///
 /// Returns whether it changed the step.
 fn project_guard<const N: usize>(
+    robot: &Robot<N>,
     guard: &Guard<'_>,
     final_approach: bool,
+    time_step_s: f32,
     ws: &mut DampedWorkspace<N>,
     rate: &mut [f32],
 ) -> bool {
@@ -203,8 +230,45 @@ fn project_guard<const N: usize>(
     if !(along > 0.0 && along.is_finite()) {
         return false;
     }
-    let k = (approach - allowed) / along;
-    apply_metric(rate, k, guard.gradient, &t, &ws.columns, &ws.metric);
+    // The joint metric's candidate, from the unprojected step.
+    let excess = approach - allowed;
+    let joint_along: f32 = guard
+        .gradient
+        .iter()
+        .zip(&ws.metric)
+        .map(|(g, m)| g * g * m)
+        .sum();
+    let joint_k = excess / joint_along;
+    for (((a, &r), &g), &m) in ws
+        .joint_metric_step
+        .iter_mut()
+        .zip(rate.iter())
+        .zip(guard.gradient)
+        .zip(&ws.metric)
+    {
+        *a = r - joint_k * m * g;
+    }
+    apply_metric(
+        rate,
+        excess / along,
+        guard.gradient,
+        &t,
+        &ws.columns,
+        &ws.metric,
+    );
+    // Descent per second of motion at the rate limits (a step shorter than
+    // `h` is taken in `h`); both steps have `rate.len()` joints.
+    let n = rate.len();
+    let pace = |step: &[f32]| {
+        let step = step.get(..n).unwrap_or(step);
+        dot_slice(&ws.drive, step) / max(time_at_limits(robot, step), time_step_s)
+    };
+    let joint_pace = pace(&ws.joint_metric_step);
+    if joint_along > 0.0 && joint_pace.is_finite() && joint_pace > pace(rate) {
+        for (r, &a) in rate.iter_mut().zip(&ws.joint_metric_step) {
+            *r = a;
+        }
+    }
     true
 }
 
@@ -415,7 +479,7 @@ pub fn damped_rate<const N: usize>(
             unconstrained_time = time_at_limits(robot, rate);
         }
     }
-    let constrained = project_guard(guard, final_approach, ws, rate);
+    let constrained = project_guard(robot, guard, final_approach, time_step_s, ws, rate);
 
     // Speed: the most loaded joint at its limit, or the whole step in one
     // (the rate is the one just timed unless the projection changed it).
@@ -433,5 +497,204 @@ pub fn damped_rate<const N: usize>(
         drive: Drive::Damped,
         constrained,
         time_at_limits_s: time_at_limits,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::control::{pose_error, Target};
+    use crate::kinematics::forward_kinematics;
+    use crate::math::Mat3;
+    use crate::robot::Joint;
+    use std::vec::Vec;
+
+    const N: usize = 16;
+
+    /// A small linear congruential generator: the test's cases are seeded.
+    struct Rng(u64);
+
+    impl Rng {
+        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+        }
+    }
+
+    /// `A = L D L^T` from [`factor`]'s output, in f64.
+    fn unfactor(f: &Sym6) -> [[f64; 6]; 6] {
+        let l = |i: usize, k: usize| match i.cmp(&k) {
+            core::cmp::Ordering::Greater => f[i][k] as f64,
+            core::cmp::Ordering::Equal => 1.0,
+            core::cmp::Ordering::Less => 0.0,
+        };
+        let mut a = [[0.0; 6]; 6];
+        for (i, row) in a.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = (0..6).map(|k| l(i, k) * f[k][k] as f64 * l(j, k)).sum();
+            }
+        }
+        a
+    }
+
+    /// `A x = b` by Gaussian elimination with partial pivoting, f64.
+    fn solve64(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> [f64; 6] {
+        for c in 0..6 {
+            let p = (c..6)
+                .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+                .unwrap();
+            a.swap(c, p);
+            b.swap(c, p);
+            for r in c + 1..6 {
+                let k = a[r][c] / a[c][c];
+                for cc in c..6 {
+                    a[r][cc] -= k * a[c][cc];
+                }
+                b[r] -= k * b[c];
+            }
+        }
+        let mut x = [0.0; 6];
+        for r in (0..6).rev() {
+            let s: f64 = (r + 1..6).map(|c| a[r][c] * x[c]).sum();
+            x[r] = (b[r] - s) / a[r][r];
+        }
+        x
+    }
+
+    /// The projection takes whichever of its two candidates lowers `V`
+    /// faster at the rate limits, and either meets the guard: checked
+    /// against both candidates built in f64 from the law's own columns,
+    /// metric and damped matrix, over random arms, targets, steps and
+    /// obstacle gradients.
+    #[test]
+    fn the_projection_takes_the_faster_of_its_two_metrics_and_meets_the_guard() {
+        let mut rng = Rng(7);
+        let (mut joint_metric, mut damped_metric) = (0, 0);
+        let h = 0.05f32;
+        for _ in 0..400 {
+            let n = 3 + (rng.uniform(0.0, 10.0) as usize);
+            let joints: Vec<Joint> = (0..n)
+                .map(|_| {
+                    let (alpha, a) = (rng.uniform(-3.0, 3.0) as f32, rng.uniform(0.2, 3.0) as f32);
+                    if rng.uniform(0.0, 1.0) < 0.25 {
+                        Joint::prismatic(alpha, a, rng.uniform(-2.0, 2.0) as f32, -2.0, 3.0, 1.5)
+                    } else {
+                        let rate = rng.uniform(0.3, 2.0) as f32;
+                        Joint::revolute(alpha, a, rng.uniform(-1.0, 1.0) as f32, -3.0, 3.0, rate)
+                    }
+                })
+                .collect();
+            let robot = Robot::<N>::new(&joints).unwrap();
+            let q: Vec<f32> = (0..n).map(|_| rng.uniform(-1.5, 1.5) as f32).collect();
+            let mut frames = Frames::<N>::default();
+            forward_kinematics(&robot, &q, &mut frames);
+            let goal = frames.end_position()
+                + Vec3::new(
+                    rng.uniform(-2.0, 2.0) as f32,
+                    rng.uniform(-2.0, 2.0) as f32,
+                    rng.uniform(-2.0, 2.0) as f32,
+                );
+            let orientation = (rng.uniform(0.0, 1.0) < 0.5).then(|| *frames.end_rotation());
+            let target = Target::pose(goal, orientation.map(|r: Mat3| r));
+            let law = LawSettings::default();
+            let error = pose_error(&frames, &target, law.orientation_scale);
+            // The law's columns, metric and factor, with no obstacle.
+            let zeros = [0.0f32; N];
+            let mut ws = DampedWorkspace::<N>::default();
+            let mut rate = [0.0f32; N];
+            let free = Guard::at(&zeros[..n], None, 1.0, 0.01);
+            damped_rate(
+                &robot,
+                &frames,
+                &q,
+                &error,
+                &free,
+                &law,
+                h,
+                &mut ws,
+                &mut rate[..n],
+            );
+            // A step to project and an obstacle it approaches.
+            let scale = rng.uniform(0.02, 2.0) as f32;
+            let step: Vec<f32> = rate[..n].iter().map(|r| r * scale).collect();
+            let g: Vec<f32> = (0..n).map(|_| rng.uniform(-1.0, 1.0) as f32).collect();
+            let guard = Guard::at(&g, Some(0.5), 1.0, 0.01);
+            let approach = dot_slice(&g, &step);
+            let Some(allowed) = guard.allowed(approach, false) else {
+                continue;
+            };
+            // Both candidates in f64.
+            let m: Vec<f64> = ws.metric[..n].iter().map(|&x| x as f64).collect();
+            let col = |j: usize| ws.columns[j].map(|x| x as f64);
+            let mut jmg = [0.0f64; 6];
+            for j in 0..n {
+                for r in 0..6 {
+                    jmg[r] += col(j)[r] * m[j] * g[j] as f64;
+                }
+            }
+            let t = solve64(unfactor(&ws.factor), jmg);
+            let kg: Vec<f64> = (0..n)
+                .map(|j| m[j] * g[j] as f64 - m[j] * (0..6).map(|r| col(j)[r] * t[r]).sum::<f64>())
+                .collect();
+            let mg: Vec<f64> = (0..n).map(|j| m[j] * g[j] as f64).collect();
+            let excess = approach as f64 - allowed as f64;
+            let candidate = |d: &[f64]| -> Vec<f64> {
+                let along: f64 = d.iter().zip(&g).map(|(x, &y)| x * y as f64).sum();
+                step.iter()
+                    .zip(d)
+                    .map(|(&s, x)| s as f64 - excess / along * x)
+                    .collect()
+            };
+            let (by_k, by_m) = (candidate(&kg), candidate(&mg));
+            let pace = |d: &[f64]| {
+                let descent: f64 = d.iter().zip(&ws.drive).map(|(x, &y)| x * y as f64).sum();
+                let time = d
+                    .iter()
+                    .zip(&joints)
+                    .map(|(x, j)| x.abs() / j.max_rate as f64)
+                    .fold(0.0, f64::max);
+                descent / time.max(h as f64)
+            };
+            let (pace_k, pace_m) = (pace(&by_k), pace(&by_m));
+            let mut out = step.clone();
+            assert!(project_guard(&robot, &guard, false, h, &mut ws, &mut out));
+            // The guard is met: g . dq = allowed.
+            let size: f64 = g
+                .iter()
+                .zip(&step)
+                .map(|(a, b)| (a * b).abs() as f64)
+                .sum::<f64>()
+                + allowed.abs() as f64;
+            let met: f64 = g.iter().zip(&out).map(|(a, b)| (a * b) as f64).sum();
+            assert!(
+                (met - allowed as f64).abs() <= 1e-3 * size,
+                "g.dq {met} vs allowed {allowed}"
+            );
+            // The faster candidate, where the two are told apart.
+            if (pace_k - pace_m).abs() <= 0.01 * (pace_k.abs() + pace_m.abs()) {
+                continue;
+            }
+            let expected = if pace_m > pace_k { &by_m } else { &by_k };
+            if pace_m > pace_k {
+                joint_metric += 1;
+            } else {
+                damped_metric += 1;
+            }
+            let norm = expected.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-6);
+            for (o, e) in out.iter().zip(expected) {
+                assert!(
+                    (*o as f64 - e).abs() <= 2e-3 * norm,
+                    "{out:?} vs {expected:?}"
+                );
+            }
+        }
+        assert!(
+            joint_metric > 20 && damped_metric > 20,
+            "{joint_metric} / {damped_metric}"
+        );
     }
 }
