@@ -161,40 +161,28 @@ pub struct DampedStep {
 }
 
 /// For `K g = M g - M J^T t`, `t = (J M J^T + mu Lambda^-1)^-1 J M g`: returns
-/// `(g . K g, t)`; `K g` itself is then one O(n) pass ([`apply_metric`]).
+/// `(g . K g, g . M g, t)`; `K g` itself is then one O(n) pass.
 fn metric_of<const N: usize>(
     g: &[f32],
     columns: &[Vec6; N],
     metric: &[f32; N],
     factor: &Sym6,
-) -> (f32, Vec6) {
+) -> (f32, f32, Vec6) {
     let mut t = [0.0f32; 6];
+    let mut joint_along = 0.0f32;
     for ((column, &m), &gj) in columns.iter().zip(metric).zip(g) {
         let u = m * gj;
         for (ti, ci) in t.iter_mut().zip(column) {
             *ti += u * ci;
         }
+        joint_along += gj * gj * m;
     }
     solve(factor, &mut t);
     let mut along = 0.0f32;
     for ((column, &m), &gj) in columns.iter().zip(metric).zip(g) {
         along += gj * (m * gj - m * dot6(column, &t));
     }
-    (along, t)
-}
-
-/// `rate -= k K g`, with `t` from [`metric_of`].
-fn apply_metric<const N: usize>(
-    rate: &mut [f32],
-    k: f32,
-    g: &[f32],
-    t: &Vec6,
-    columns: &[Vec6; N],
-    metric: &[f32; N],
-) {
-    for (((r, column), &m), &gj) in rate.iter_mut().zip(columns).zip(metric).zip(g) {
-        *r -= k * (m * gj - m * dot6(column, t));
-    }
+    (along, joint_along, t)
 }
 
 /// Projects `rate` (the step `dq*`) against `guard`: the least change that
@@ -226,45 +214,38 @@ fn project_guard<const N: usize>(
     let Some(allowed) = guard.allowed(approach, final_approach) else {
         return false;
     };
-    let (along, t) = metric_of(guard.gradient, &ws.columns, &ws.metric, &ws.factor);
+    let (along, joint_along, t) = metric_of(guard.gradient, &ws.columns, &ws.metric, &ws.factor);
     if !(along > 0.0 && along.is_finite()) {
         return false;
     }
-    // The joint metric's candidate, from the unprojected step.
+    // One pass: the step projected in K (into `rate`) and in M (into the
+    // workspace), from the unprojected step, and for each its descent
+    // `G . dq` and its time at the rate limits.
     let excess = approach - allowed;
-    let joint_along: f32 = guard
-        .gradient
-        .iter()
-        .zip(&ws.metric)
-        .map(|(g, m)| g * g * m)
-        .sum();
-    let joint_k = excess / joint_along;
-    for (((a, &r), &g), &m) in ws
-        .joint_metric_step
+    let (k, joint_k) = (excess / along, excess / joint_along);
+    let (mut descent, mut joint_descent) = (0.0f32, 0.0f32);
+    let (mut time, mut joint_time) = (0.0f32, 0.0f32);
+    for ((((((r, a), column), &m), &gj), &drive), joint) in rate
         .iter_mut()
-        .zip(rate.iter())
-        .zip(guard.gradient)
+        .zip(ws.joint_metric_step.iter_mut())
+        .zip(&ws.columns)
         .zip(&ws.metric)
+        .zip(guard.gradient)
+        .zip(&ws.drive)
+        .zip(robot.joints())
     {
-        *a = r - joint_k * m * g;
+        *a = *r - joint_k * m * gj;
+        *r -= k * (m * gj - m * dot6(column, &t));
+        descent += drive * *r;
+        joint_descent += drive * *a;
+        time = max(time, r.abs() / joint.max_rate);
+        joint_time = max(joint_time, a.abs() / joint.max_rate);
     }
-    apply_metric(
-        rate,
-        excess / along,
-        guard.gradient,
-        &t,
-        &ws.columns,
-        &ws.metric,
-    );
     // Descent per second of motion at the rate limits (a step shorter than
-    // `h` is taken in `h`); both steps have `rate.len()` joints.
-    let n = rate.len();
-    let pace = |step: &[f32]| {
-        let step = step.get(..n).unwrap_or(step);
-        dot_slice(&ws.drive, step) / max(time_at_limits(robot, step), time_step_s)
-    };
-    let joint_pace = pace(&ws.joint_metric_step);
-    if joint_along > 0.0 && joint_pace.is_finite() && joint_pace > pace(rate) {
+    // `h` is taken in `h`).
+    let pace = descent / max(time, time_step_s);
+    let joint_pace = joint_descent / max(joint_time, time_step_s);
+    if joint_along > 0.0 && joint_pace.is_finite() && joint_pace > pace {
         for (r, &a) in rate.iter_mut().zip(&ws.joint_metric_step) {
             *r = a;
         }
