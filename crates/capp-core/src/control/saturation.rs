@@ -50,7 +50,7 @@ use crate::robot::Robot;
 
 /// Most joints held in one step: each round costs a rank-one downdate, two
 /// 6 x 6 solves and a pass over the joints (on the Cortex-M4F a PIPS step
-/// with 8 obstacles takes 46 536 instructions with saturation, 38 166
+/// with 8 obstacles took 46 536 instructions with saturation, 38 166
 /// without: BENCHMARKS.md), and the first few give most of the gain (median
 /// motion time of the suite's PIPS free-space cases, seeds 1-3: 8.5 s for
 /// uniform scaling, 6.05 s holding at most 2 joints, 5.3 s at most 4, 4.95 s
