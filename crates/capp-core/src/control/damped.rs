@@ -482,6 +482,8 @@ pub fn damped_rate<const N: usize>(
 }
 
 #[cfg(test)]
+// Index loops read as the textbook elimination; the bounds are constants.
+#[allow(clippy::needless_range_loop)]
 mod tests {
     extern crate std;
     use super::*;
