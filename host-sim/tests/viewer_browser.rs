@@ -213,7 +213,7 @@ fn viewer_shows_the_escape_under_way() {
          [units]\nangle = \"radians\"\nlength = \"inches\"\n\
          {joint}{joint}{joint}\
          [target]\nposition = [24.2, -13.2, 0.0]\n\
-         [[obstacles]]\nname = \"post\"\ncentre = [25.0, -1.0, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
+         [[obstacles]]\nname = \"post\"\ncentre = [25.0, -0.5, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
          [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n"
     );
     let dir = tempfile::tempdir().unwrap();

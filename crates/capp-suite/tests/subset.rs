@@ -329,7 +329,7 @@ const DETOUR: &str = "name = \"detour\"\nstart = [0.0, 0.5, 0.5]\n\
     [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
     [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
     [target]\nposition = [24.2, -13.2, 0.0]\n\
-    [[obstacles]]\nname = \"post\"\ncentre = [25.0, -1.0, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
+    [[obstacles]]\nname = \"post\"\ncentre = [25.0, -0.5, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
     [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n";
 
 #[test]
