@@ -64,8 +64,9 @@
 //!   along a curved surface does not creep closer step by step. Where the
 //!   target itself lies by an obstacle, `mu_P` is nearly in the task's range
 //!   and `K mu_P` is a large null-space motion that the rate limits slow to
-//!   a crawl; the same projection in the joint metric `M` (eq. 24 as the
-//!   paper weights it) is then taken instead, whichever of the two lowers
+//!   a crawl; the same projection in the joint metric `M` (eq. 24's
+//!   projection in eq. 18's weights times the rate limits) is then taken
+//!   instead, whichever of the two lowers
 //!   `V` faster per second at the rate limits (`project_guard`).
 //! * **Speed**: `T = max_j |dq_j| / qdot_max_j` is the time the step needs at
 //!   the rate limits. Longer than the time step `h`: the rate is `dq / T`, so
@@ -197,9 +198,9 @@ fn metric_of<const N: usize>(
 ///   the null space has little to give, `g . K g` is small and the
 ///   correction is a large null-space motion that the rate limits then
 ///   slow to a crawl;
-/// * `M`, the joint metric (eq. 24 with the paper's weighting): `dq* - k M
-///   g`. It gives up some of the task's motion instead, at the joints'
-///   cost.
+/// * `M`, the law's joint metric (eq. 18's weights times the rate limits,
+///   as eq. 24 projects): `dq* - k M g`. It gives up some of the task's
+///   motion instead.
 ///
 /// Returns whether it changed the step.
 fn project_guard<const N: usize>(
