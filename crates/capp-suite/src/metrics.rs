@@ -143,6 +143,11 @@ pub struct RunMetrics {
     pub wall_ms: f64,
     /// Dead-end escapes.
     pub escape: EscapeCounts,
+    /// FNV-1a (64 bits) over every row's step, time step, joint values and
+    /// `V`, as `f32` bits, and the outcome: two runs with the same
+    /// fingerprint made the same trajectory to the bit (a refactor's
+    /// evidence, `results.csv`'s `trajectory_bits`).
+    pub fingerprint: u64,
 }
 
 impl RunMetrics {
@@ -280,5 +285,24 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         dense_checks,
         wall_ms: result.wall_time.as_secs_f64() * 1e3,
         escape: EscapeCounts::of(&result.rows),
+        fingerprint: fingerprint(result),
     }
+}
+
+/// [`RunMetrics::fingerprint`] of `result`.
+pub fn fingerprint(result: &RunResult) -> u64 {
+    let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+    let mut eat = |word: u32| {
+        for b in word.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01B3);
+        }
+    };
+    for r in &result.rows {
+        eat(r.step);
+        eat(r.h.to_bits());
+        r.q.iter().for_each(|x| eat(x.to_bits()));
+        eat(r.v.to_bits());
+    }
+    eat(result.outcome as u32);
+    h
 }

@@ -722,7 +722,7 @@ fn escape_sides(e: &crate::metrics::EscapeCounts) -> String {
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
     // A refused file: every measurement column empty (all but the case's 4,
@@ -751,7 +751,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
                         capp_sim::output::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -777,6 +777,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                         m.escape.returned,
                         m.escape.first_step.map_or(String::new(), |x| x.to_string()),
                         escape_sides(&m.escape),
+                        m.fingerprint,
                         m.wall_ms,
                     );
                 }
