@@ -107,7 +107,7 @@ fn a_dead_end_escaped_on_the_board_is_the_host_plan() {
     assert!(n > 20, "{n} setpoints");
 }
 
-/// The search (`capp_core::tree`) on the board: it holds the arm still for
+/// The search (`capp_core::escape::search`) on the board: it holds the arm still for
 /// its slices, walks the tree's path and reaches the target, the host's plan
 /// to the bit.
 #[test]

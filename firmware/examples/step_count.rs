@@ -506,7 +506,7 @@ fn escape_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, overhead: u6
 /// with no obstacle to go round (drawing and scoring the candidates, one
 /// forward kinematics pass each).
 fn stall_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, blocking: u8) {
-    use capp_core::escape::Escape;
+    use capp_core::escape::{Escape, Stall};
     use capp_core::kinematics::Frames;
     let sc = &scene.scenario;
     let (n, m) = (scene.joints, sc.obstacles().len());
@@ -528,19 +528,15 @@ fn stall_costs(name: &str, scene: &Scene<{ scenes::PIPS_JOINTS }>, blocking: u8)
             &mut escape,
             |e| e.clone_from(&fresh),
             |e| {
-                black_box(e.on_stall(
-                    &settings.escape,
-                    sc.robot(),
-                    sc.obstacles(),
-                    planner.joints(),
-                    planner.frames(),
-                    1.0,
-                    &mu[..n],
-                    obstacle,
-                    target.position,
-                    settings.avoidance.joint_margin,
-                    &mut scratch,
-                ));
+                let stall = Stall {
+                    q: planner.joints(),
+                    frames: planner.frames(),
+                    v: 1.0,
+                    mu: &mu[..n],
+                    blocking: obstacle,
+                    target: target.position,
+                };
+                black_box(e.on_stall(sc, &stall, &mut scratch));
             },
         );
         line(name, n, m, what, c);

@@ -24,7 +24,7 @@ pub enum Kind {
     Walk,
     /// The attempts spent: back to the best configuration (the run then ends `Stalled`).
     Return,
-    /// A search for a path, the arm holding still (`capp_core::tree`).
+    /// A search for a path, the arm holding still (`capp_core::escape::search`).
     Search,
     /// The walk along the path a search found.
     Path,

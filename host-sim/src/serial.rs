@@ -22,8 +22,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use capp_core::avoidance::potential_gradient;
-use capp_core::control::pose_error;
 use capp_core::kinematics::{forward_kinematics, Frames};
+use capp_core::target::pose_error;
 use capp_core::Outcome;
 use capp_link::{FrameErrors, Link, LinkError, PlanRecord, Upload};
 use capp_proto::{State, Status};

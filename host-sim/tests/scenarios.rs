@@ -91,7 +91,7 @@ fn pips_escape_reaches_by_a_detour_and_stalls_without_escapes() {
     assert!(last.position_error > 1.0, "{}", last.position_error);
 }
 
-/// The search (`capp_core::tree`) on a dead end two detours do not pass:
+/// The search (`capp_core::escape::search`) on a dead end two detours do not pass:
 /// the arm holds still while it runs (every searching row repeats the
 /// configuration, with no time step), then walks the path it found and the
 /// law finishes; the checker accepts the whole run. Without searches the

@@ -15,13 +15,12 @@
 
 use capp_core::avoidance::{potential_gradient, ObstacleField};
 use capp_core::control::damped::{damped_rate, DampedWorkspace};
-use capp_core::control::{
-    descent_rate, lyapunov_terms, pose_error, weighted_rate, LawKind, PoseError, Target,
-};
+use capp_core::control::{descent_rate, lyapunov_terms, weighted_rate, LawInput, LawKind};
 use capp_core::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use capp_core::math::dot_slice;
-use capp_core::projection::{approach, limit_rates, project, retreat, strength, Guard};
+use capp_core::projection::{limit_rates, project, strength};
 use capp_core::step_size::advancement;
+use capp_core::target::{pose_error, PoseError, Target};
 use capp_core::{Planner, Scenario};
 
 /// Everything the phases read and write, copied from a planner.
@@ -105,35 +104,19 @@ impl<const N: usize> PhaseBench<N> {
         let n = self.n;
         self.error = pose_error(&self.frames, &self.target, law.orientation_scale);
         if law.kind == LawKind::DampedLeastSquares {
-            let engage = strength(
-                self.field.clearance.map(|c| c.value),
-                settings.avoidance.engage_clearance,
-            );
-            let guard = Guard {
-                gradient: &self.mu[..n],
-                strength: engage,
-                retreat: retreat(
-                    self.field.clearance.map(|c| c.value),
-                    settings.avoidance.engage_clearance,
-                ),
-                approach: approach(
-                    self.field.clearance.map(|c| c.value),
-                    settings.avoidance.engage_clearance,
-                    capp_core::planner::CONTACT_FLOOR,
-                ),
-            };
-            return damped_rate(
+            let input = LawInput {
                 robot,
-                &self.frames,
-                &self.q[..n],
-                &self.error,
-                &guard,
+                frames: &self.frames,
+                q: &self.q[..n],
+                error: &self.error,
+                mu: &self.mu[..n],
+                clearance: self.field.clearance.map(|c| c.value),
                 law,
-                settings.time_step_s,
-                &mut self.damped,
-                &mut self.rate[..n],
-            )
-            .time_at_limits_s;
+                engage_clearance: settings.avoidance.engage_clearance,
+                step: settings.step_rule(),
+                error_step: 0.0,
+            };
+            return damped_rate(&input, &mut self.damped, &mut self.rate[..n]).time_step_s;
         }
         lyapunov_terms(robot, &self.frames, &self.error, &mut self.terms);
         weighted_rate(

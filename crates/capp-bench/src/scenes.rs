@@ -30,7 +30,7 @@ use capp_core::kinematics::{forward_kinematics, Frames};
 use capp_core::math::Vec3;
 use capp_core::obstacle::Obstacle;
 use capp_core::{
-    pips, Joint, Mission, Planner, Robot, Scenario, ScenarioError, Settings, StartError,
+    pips, Joint, Mission, Planner, Robot, Scenario, ScenarioError, Settings, StartError, StepError,
     SuperEllipsoid, Waypoint,
 };
 
@@ -65,6 +65,8 @@ pub enum SceneError {
     Scenario(ScenarioError),
     /// The planner refused the start.
     Start(StartError),
+    /// The planner refused a step.
+    Step(StepError),
     /// More joints or obstacles than the capacities, or fewer than 2 joints.
     Size,
     /// No free place was found for an equipment obstacle.
@@ -80,6 +82,12 @@ impl From<ScenarioError> for SceneError {
 impl From<StartError> for SceneError {
     fn from(e: StartError) -> Self {
         SceneError::Start(e)
+    }
+}
+
+impl From<StepError> for SceneError {
+    fn from(e: StepError) -> Self {
+        SceneError::Step(e)
     }
 }
 
@@ -174,7 +182,7 @@ fn scatter<const N: usize>(
         if tries > 400 * (count + 1) {
             return Err(SceneError::Crowded);
         }
-        let from = frames.origin((rng.uniform(0.0, n as f32) as usize).min(n - 1));
+        let from = frames.link_end((rng.uniform(0.0, n as f32) as usize).min(n - 1));
         let t = rng.uniform(0.0, 1.0);
         let on_path = from + (target_v - from) * t;
         let dir = Vec3::new(

@@ -4,7 +4,9 @@
 
 use capp_bench::scenes::{self, SCALING_JOINTS, SCALING_OBSTACLES};
 use capp_bench::{listing, Listing, PhaseBench};
-use capp_core::control::{lyapunov_terms, pose_error};
+use capp_core::control::lyapunov_terms;
+
+use capp_core::target::pose_error;
 use capp_core::Phase;
 
 #[test]

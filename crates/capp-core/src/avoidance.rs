@@ -25,6 +25,7 @@ use crate::kinematics::Frames;
 use crate::math::{min, norm, Vec3};
 use crate::obstacle::{Obstacle, Pair, PointKind};
 use crate::robot::{JointKind, Robot};
+use crate::settings_field::{first_bad, non_negative, positive, SettingsField};
 
 /// Where the avoidance points are and how much room they need.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,6 +61,35 @@ impl AvoidanceSettings {
             engage_clearance: 1.0,
             advance_fraction: 1.0,
         }
+    }
+
+    /// Checks each value's range.
+    pub fn validate(&self) -> Result<(), SettingsField> {
+        first_bad(&[
+            (
+                non_negative(self.joint_margin)
+                    && non_negative(self.link_margin)
+                    && self.joint_margin <= 1e4
+                    && self.link_margin <= 1e4,
+                SettingsField::Margin,
+            ),
+            (
+                (1..=8).contains(&self.points_per_link),
+                SettingsField::PointsPerLink,
+            ),
+            (
+                positive(self.influence_distance) && self.influence_distance <= 1e4,
+                SettingsField::InfluenceDistance,
+            ),
+            (
+                positive(self.advance_fraction) && self.advance_fraction <= 1.0,
+                SettingsField::AdvanceFraction,
+            ),
+            (
+                non_negative(self.engage_clearance) && self.engage_clearance <= 1e6,
+                SettingsField::EngageClearance,
+            ),
+        ])
     }
 
     /// Margins indexed by [`PointKind`].
@@ -101,7 +131,7 @@ pub fn link_points<const N: usize>(
     link: usize,
 ) -> impl Iterator<Item = AvoidancePoint> {
     let start = frames.pivot(link);
-    let end = frames.origin(link);
+    let end = frames.link_end(link);
     let per = settings.points_per_link_total();
     let interior = settings.points_per_link as usize;
     (0..per).map(move |i| {
@@ -222,7 +252,7 @@ pub fn potential_gradient<const N: usize>(
     let mut nearest_sq = influence_sq;
     for j in (0..n).rev() {
         let pivot = frames.pivot(j);
-        moment += (frames.origin(j) - pivot).cross(&force);
+        moment += (frames.link_end(j) - pivot).cross(&force);
         let beyond = force;
         let mut sliding_force = Vec3::zeros();
         // The link's nearest pair (distance, obstacle, point) and its

@@ -4,7 +4,14 @@
 //! Joint `k` (1-based) moves about / along the axis `z_{k-1}` of frame `k-1`
 //! through its origin `o_{k-1}`. Here joints are 0-based: joint `j` moves about
 //! [`Frames::axis`]`(j)` through [`Frames::pivot`]`(j)`, and its link ends at
-//! [`Frames::origin`]`(j)` (= `o_{j+1}`).
+//! [`Frames::link_end`]`(j)`: the next joint's pivot, or the end effector.
+//!
+//! [`Frames`] stores each joint's axis and pivot as they are, not as a DH
+//! frame: everything downstream (the Jacobian columns, the avoidance points,
+//! conservative advancement) reads only those, so a joint described another
+//! way (a URDF joint: a fixed transform, then a motion about its own axis)
+//! needs only its own forward pass here. [`Frames::column`] is the one
+//! Jacobian column.
 //!
 //! Exact columns of the Jacobian of anything carried by a frame at or after
 //! joint `j` (no finite differences):
@@ -25,10 +32,12 @@ use crate::robot::{JointKind, Robot};
 #[derive(Clone, Debug)]
 pub struct Frames<const N: usize> {
     n: usize,
-    /// `origin[j]` = `o_{j+1}`, the origin of the frame after joint `j`.
-    origin: [Vec3; N],
-    /// `axis[j]` = `z_j`, the unit axis joint `j` moves about or along.
+    /// `pivot[j]`, the point joint `j` turns about (DH: `o_j`).
+    pivot: [Vec3; N],
+    /// `axis[j]`, the unit axis joint `j` moves about or along (DH: `z_j`).
     axis: [Vec3; N],
+    /// Position of the end effector `r_n4` (DH: `o_n`).
+    end_position: Vec3,
     /// Orientation of the end-effector frame `n`: columns `r_n1, r_n2, r_n3` (eq. 6).
     end_rotation: Mat3,
 }
@@ -37,8 +46,9 @@ impl<const N: usize> Default for Frames<N> {
     fn default() -> Self {
         Frames {
             n: 0,
-            origin: [Vec3::zeros(); N],
+            pivot: [Vec3::zeros(); N],
             axis: [Vec3::z(); N],
+            end_position: Vec3::zeros(),
             end_rotation: Mat3::identity(),
         }
     }
@@ -57,27 +67,23 @@ impl<const N: usize> Frames<N> {
         self.n == 0
     }
 
-    /// Origin of the frame after joint `j` (`o_{j+1}`), length units.
+    /// Where link `j` ends, length units: the pivot of joint `j + 1`, or the
+    /// end effector after the last joint (DH: `o_{j+1}`).
     #[inline]
-    pub fn origin(&self, j: usize) -> Vec3 {
-        // `get`: no panic path; every caller passes `j < len()`.
-        self.origin.get(j).copied().unwrap_or_else(Vec3::zeros)
+    pub fn link_end(&self, j: usize) -> Vec3 {
+        if j + 1 < self.n {
+            self.pivot(j + 1)
+        } else {
+            self.end_position
+        }
     }
 
-    /// Origins `o_1 .. o_n`.
-    #[inline]
-    pub fn origins(&self) -> &[Vec3] {
-        &self.origin[..self.n]
-    }
-
-    /// Origin `o_j` of the frame *before* joint `j`: the point joint `j` turns about.
+    /// The point joint `j` turns about (a prismatic joint: where its link
+    /// starts), length units (DH: `o_j`).
     #[inline]
     pub fn pivot(&self, j: usize) -> Vec3 {
-        if j == 0 {
-            Vec3::zeros()
-        } else {
-            self.origin(j - 1)
-        }
+        // `get`: no panic path; every caller passes `j < len()`.
+        self.pivot.get(j).copied().unwrap_or_else(Vec3::zeros)
     }
 
     /// Unit axis `z_j` joint `j` turns about or slides along.
@@ -86,13 +92,23 @@ impl<const N: usize> Frames<N> {
         self.axis.get(j).copied().unwrap_or_else(Vec3::z)
     }
 
+    /// Column `j` of the Jacobian of a point `p` carried by a link at or
+    /// after joint `j` (of kind `kind`): `(dp/dq_j, dw/dq_j)`, the linear and
+    /// the angular velocity per unit rate of joint `j`: `(z x (p - o), z)`
+    /// for a revolute joint, `(z, 0)` for a prismatic one. O(1).
+    #[inline]
+    pub fn column(&self, j: usize, kind: JointKind, p: &Vec3) -> (Vec3, Vec3) {
+        let z = self.axis(j);
+        match kind {
+            JointKind::Revolute => (z.cross(&(p - self.pivot(j))), z),
+            JointKind::Prismatic => (z, Vec3::zeros()),
+        }
+    }
+
     /// End-effector position `r_n4`.
     #[inline]
     pub fn end_position(&self) -> Vec3 {
-        match self.n.checked_sub(1).and_then(|last| self.origin.get(last)) {
-            Some(&o) => o,
-            None => Vec3::zeros(),
-        }
+        self.end_position
     }
 
     /// End-effector orientation (columns `r_n1..r_n3`).
@@ -111,16 +127,17 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
     let mut rot = Mat3::identity();
     let mut o = Vec3::zeros();
     let mut n = 0;
-    for (((joint, link), &qj), (origin, axis)) in robot
+    for (((joint, link), &qj), (pivot, axis)) in robot
         .joints()
         .iter()
         .zip(robot.links())
         .zip(q)
-        .zip(frames.origin.iter_mut().zip(frames.axis.iter_mut()))
+        .zip(frames.pivot.iter_mut().zip(frames.axis.iter_mut()))
     {
         let x = rot.column(0).into_owned();
         let y = rot.column(1).into_owned();
         let z = rot.column(2).into_owned();
+        *pivot = o;
         *axis = z;
         let (ct, st, d) = match joint.kind {
             JointKind::Revolute => {
@@ -135,16 +152,18 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
         let yk = yt * link.cos_alpha + z * link.sin_alpha;
         let zk = z * link.cos_alpha - yt * link.sin_alpha;
         o += z * d + xk * joint.a;
-        *origin = o;
         rot = Mat3::from_columns(&[xk, yk, zk]);
         n += 1;
     }
     frames.n = n;
+    frames.end_position = o;
     frames.end_rotation = rot;
 }
 
 /// `J_p^T f` for a force `f` at the end effector: `out[j] = z_j . ((p - o_j) x f)`
 /// (revolute) or `z_j . f` (prismatic). `out` must hold `frames.len()` values.
+/// (The triple product in this order, not [`Frames::column`] dotted with
+/// `f`: the same value, rounded as the plans have always been.)
 pub fn end_point_force<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -191,14 +210,11 @@ pub fn end_twist<const N: usize>(
     let mut v = Vec3::zeros();
     let mut w = Vec3::zeros();
     for (j, (joint, &r)) in robot.joints().iter().zip(rate).enumerate() {
-        let z = frames.axis(j);
-        match joint.kind {
-            JointKind::Revolute => {
-                w += z * r;
-                v += z.cross(&(p - frames.pivot(j))) * r;
-            }
-            JointKind::Prismatic => v += z * r,
+        let (linear, angular) = frames.column(j, joint.kind, &p);
+        if joint.kind == JointKind::Revolute {
+            w += angular * r;
         }
+        v += linear * r;
     }
     (v, w)
 }
@@ -216,12 +232,9 @@ pub fn column_sizes<const N: usize>(
     let p = frames.end_position();
     let rot = 2.0 * orientation_scale * orientation_scale;
     for (j, (joint, out)) in robot.joints().iter().zip(out.iter_mut()).enumerate() {
-        *out = match joint.kind {
-            JointKind::Revolute => {
-                let c = frames.axis(j).cross(&(p - frames.pivot(j)));
-                c.dot(&c) + rot
-            }
-            JointKind::Prismatic => 1.0,
+        *out = match frames.column(j, joint.kind, &p) {
+            (c, _) if joint.kind == JointKind::Revolute => c.dot(&c) + rot,
+            _ => 1.0,
         };
     }
 }

@@ -13,17 +13,19 @@
 //! |---|---|
 //! | [`robot`] | the Denavit-Hartenberg chain, joint kinds, limits, rates, weights (eq. 5) |
 //! | [`pips`] | the 18-joint PIPS of Table 1 as a preset |
-//! | [`kinematics`] | forward kinematics and exact Jacobian-transpose products (eqs. 6, 14) |
+//! | [`kinematics`] | forward kinematics into [`kinematics::Frames`] (each joint's axis and pivot), the Jacobian column, exact Jacobian-transpose products (eqs. 6, 14) |
+//! | [`target`] | the target and the pose error (eqs. 11-12) |
+//! | [`evaluation`] | everything known about one configuration, and the planner's two slots of it |
 //! | [`obstacle`] | super-ellipsoid obstacles, their inside-outside function and its gradient (eq. 25) |
 //! | [`avoidance`] | avoidance points on the arm, the potential of eq. 26 and its joint-space gradient (eq. 20) |
-//! | [`control`] | the laws that drive the end effector: the Lyapunov law (eqs. 11-15), the gradient law, the joint weighting (eq. 18); [`control::damped`], damped least squares on `V` (the default); [`control::saturation`], how it spends the rate limits of a redundant arm |
+//! | [`control`] | the laws that drive the end effector, all called through [`control::law::propose`]: the Lyapunov law (eqs. 11-15), the gradient law, the joint weighting (eq. 18); [`control::damped`], damped least squares on `V` (the default); [`control::saturation`], how it spends the rate limits of a redundant arm |
 //! | [`linalg`] | the 6 x 6 symmetric positive definite solve the damped law needs |
 //! | [`projection`] | keeping the joint rate orthogonal to the obstacle gradient (eqs. 22-24) |
 //! | [`step_size`] | how long a step is: the listing's rule, its bounds, conservative advancement |
-//! | [`escape`] | what happens at a dead end: remembered, walked away from, descended again |
-//! | [`mission`] | waypoints, tolerances and planner settings |
+//! | [`escape`] | what happens at a dead end: remembered, detoured, searched ([`escape::search`]), walked away from, descended again |
+//! | [`mission`] | waypoints, tolerances and planner settings (each stage's settings validate themselves; [`settings_field`] names a bad one) |
 //! | [`scenario`] | robot + obstacles + mission, validated together |
-//! | [`planner`] | the per-step state machine: law, step size, integration, acceptance, outcome |
+//! | [`planner`] | the per-step loop: evaluate, choose the drive goal, propose, bound, accept or shorten, account |
 //! | [`setpoint`] | decimation of the joint stream, as the listing's `joints.dat` |
 //!
 //! Units: angles in radians, lengths in whatever unit the robot is described in
@@ -57,6 +59,7 @@ extern crate std;
 pub mod avoidance;
 pub mod control;
 pub mod escape;
+pub mod evaluation;
 pub mod kinematics;
 pub mod linalg;
 pub mod math;
@@ -68,12 +71,13 @@ pub mod projection;
 pub mod robot;
 pub mod scenario;
 pub mod setpoint;
+pub mod settings_field;
 pub mod step_size;
-pub mod tree;
+pub mod target;
 
 pub use mission::{Mission, MissionError, Settings, Waypoint};
 pub use obstacle::{ObstacleError, SuperEllipsoid};
-pub use planner::{Outcome, Phase, Planner, StartError, StepReport};
+pub use planner::{Outcome, Phase, Planner, StartError, StepError, StepReport};
 pub use robot::{Joint, JointKind, Robot, RobotError};
 pub use scenario::{Scenario, ScenarioError};
 pub use setpoint::SetpointFilter;

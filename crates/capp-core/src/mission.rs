@@ -10,8 +10,11 @@
 
 use crate::avoidance::AvoidanceSettings;
 use crate::control::LawSettings;
-use crate::escape::EscapeSettings;
+use crate::escape::settings::EscapeSettings;
 use crate::robot::Robot;
+pub use crate::settings_field::SettingsField;
+use crate::settings_field::{first_bad, positive};
+use crate::step_size::StepRule;
 
 /// A point to pass through, or the final target.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -133,83 +136,6 @@ pub fn reference_length() -> f32 {
     crate::pips::robot::<{ crate::pips::JOINTS }>().map_or(1.0, |r| r.reach())
 }
 
-/// Which setting an error is about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SettingsField {
-    /// `time_step_s`
-    TimeStep,
-    /// `fine_radius`
-    FineRadius,
-    /// `fine_step_fraction`
-    FineStepFraction,
-    /// `position_tolerance`
-    PositionTolerance,
-    /// `orientation_tolerance`
-    OrientationTolerance,
-    /// `law.orientation_scale`
-    OrientationScale,
-    /// `law.approach_radius`
-    ApproachRadius,
-    /// `avoidance.joint_margin` or `avoidance.link_margin`
-    Margin,
-    /// `avoidance.points_per_link`
-    PointsPerLink,
-    /// `avoidance.influence_distance`
-    InfluenceDistance,
-    /// `avoidance.engage_clearance`
-    EngageClearance,
-    /// `avoidance.advance_fraction`
-    AdvanceFraction,
-    /// `law.damping`
-    Damping,
-    /// `escape.window`, `escape.walk_steps` or `escape.reach`
-    Escape,
-    /// `max_steps`
-    MaxSteps,
-    /// `stall_window`
-    StallWindow,
-    /// `stall_progress`
-    StallProgress,
-    /// `max_halvings`
-    MaxHalvings,
-}
-
-impl core::fmt::Display for SettingsField {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
-            SettingsField::TimeStep => "time_step_s must be positive and finite",
-            SettingsField::FineRadius => "fine_radius must be non-negative and finite",
-            SettingsField::FineStepFraction => "fine_step_fraction must be in (0, 1]",
-            SettingsField::PositionTolerance => "position_tolerance must be positive and finite",
-            SettingsField::OrientationTolerance => {
-                "orientation_tolerance must be positive and finite"
-            }
-            SettingsField::OrientationScale => {
-                "orientation_scale must be non-negative and at most 1e4"
-            }
-            SettingsField::ApproachRadius => "approach_radius must be non-negative and finite",
-            SettingsField::Margin => "margins must be non-negative and at most 1e4",
-            SettingsField::PointsPerLink => "points_per_link must be 1 to 8",
-            SettingsField::InfluenceDistance => {
-                "influence_distance must be positive and at most 1e4"
-            }
-            SettingsField::AdvanceFraction => "advance_fraction must be in (0, 1]",
-            SettingsField::Damping => "damping must be positive and at most 1",
-            SettingsField::Escape => {
-                "escape: window and walk_steps must be at least 1, reach in (0, 1]"
-            }
-            SettingsField::EngageClearance => {
-                "engage_clearance must be non-negative and at most 1e6"
-            }
-            SettingsField::MaxSteps => "max_steps must be at least 1",
-            SettingsField::StallWindow => "stall_window must be at least 1",
-            SettingsField::StallProgress => "stall_progress must be in [0, 1)",
-            SettingsField::MaxHalvings => "max_halvings must be at most 16",
-        })
-    }
-}
-
 /// Why a mission was rejected. `waypoint` is 0-based.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -297,77 +223,50 @@ impl core::fmt::Display for MissionError {
 }
 
 impl Settings {
-    /// Checks every setting's range.
+    /// Checks every setting's range: its own, then each stage's
+    /// ([`LawSettings::validate`], [`AvoidanceSettings::validate`],
+    /// [`EscapeSettings::validate`]).
     pub fn validate(&self) -> Result<(), MissionError> {
         use SettingsField as F;
-        let positive = |x: f32| x.is_finite() && x > 0.0;
-        let non_negative = |x: f32| x.is_finite() && x >= 0.0;
-        let checks = [
-            (positive(self.time_step_s), F::TimeStep),
-            (non_negative(self.fine_radius), F::FineRadius),
-            (
-                positive(self.fine_step_fraction) && self.fine_step_fraction <= 1.0,
-                F::FineStepFraction,
-            ),
-            (positive(self.position_tolerance), F::PositionTolerance),
-            (
-                positive(self.orientation_tolerance),
-                F::OrientationTolerance,
-            ),
-            (
-                non_negative(self.law.orientation_scale) && self.law.orientation_scale <= 1e4,
-                F::OrientationScale,
-            ),
-            (non_negative(self.law.approach_radius), F::ApproachRadius),
-            (
-                non_negative(self.avoidance.joint_margin)
-                    && non_negative(self.avoidance.link_margin)
-                    && self.avoidance.joint_margin <= 1e4
-                    && self.avoidance.link_margin <= 1e4,
-                F::Margin,
-            ),
-            (
-                (1..=8).contains(&self.avoidance.points_per_link),
-                F::PointsPerLink,
-            ),
-            (
-                positive(self.avoidance.influence_distance)
-                    && self.avoidance.influence_distance <= 1e4,
-                F::InfluenceDistance,
-            ),
-            (
-                positive(self.avoidance.advance_fraction) && self.avoidance.advance_fraction <= 1.0,
-                F::AdvanceFraction,
-            ),
-            (
-                positive(self.law.damping) && self.law.damping <= 1.0,
-                F::Damping,
-            ),
-            (
-                non_negative(self.avoidance.engage_clearance)
-                    && self.avoidance.engage_clearance <= 1e6,
-                F::EngageClearance,
-            ),
-            (self.max_steps >= 1, F::MaxSteps),
-            (self.stall_window >= 1, F::StallWindow),
-            (
-                self.stall_progress.is_finite()
-                    && self.stall_progress >= 0.0
-                    && self.stall_progress < 1.0,
-                F::StallProgress,
-            ),
-            (self.max_halvings <= 16, F::MaxHalvings),
-            (
-                self.escape.window >= 1
-                    && self.escape.walk_steps >= 1
-                    && positive(self.escape.reach)
-                    && self.escape.reach <= 1.0,
-                F::Escape,
-            ),
-        ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, field)) => Err(MissionError::BadSetting(*field)),
-            None => Ok(()),
+        let own = || {
+            first_bad(&[
+                (positive(self.position_tolerance), F::PositionTolerance),
+                (
+                    positive(self.orientation_tolerance),
+                    F::OrientationTolerance,
+                ),
+            ])
+        };
+        let tail = || {
+            first_bad(&[
+                (self.max_steps >= 1, F::MaxSteps),
+                (self.stall_window >= 1, F::StallWindow),
+                (
+                    self.stall_progress.is_finite()
+                        && self.stall_progress >= 0.0
+                        && self.stall_progress < 1.0,
+                    F::StallProgress,
+                ),
+                (self.max_halvings <= 16, F::MaxHalvings),
+            ])
+        };
+        self.step_rule()
+            .validate()
+            .and_then(|()| own())
+            .and_then(|()| self.law.validate())
+            .and_then(|()| self.avoidance.validate())
+            .and_then(|()| tail())
+            .and_then(|()| self.escape.validate())
+            .map_err(MissionError::BadSetting)
+    }
+
+    /// The first-order laws' step rule ([`StepRule`]), from this step size
+    /// and fine radius.
+    pub fn step_rule(&self) -> StepRule {
+        StepRule {
+            time_step_s: self.time_step_s,
+            fine_radius: self.fine_radius,
+            fine_step_fraction: self.fine_step_fraction,
         }
     }
 }

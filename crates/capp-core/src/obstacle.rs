@@ -62,10 +62,10 @@ impl SuperEllipsoid {
     }
 }
 
-/// Which field of an obstacle an error is about.
+/// Which parameter of an obstacle an error is about.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ObstacleField {
+pub enum ObstacleParameter {
     /// `centre`
     Centre,
     /// `semi_axes`
@@ -90,7 +90,7 @@ pub enum ObstacleError {
         /// The obstacle.
         obstacle: u8,
         /// The field.
-        field: ObstacleField,
+        field: ObstacleParameter,
     },
     /// A semi-axis outside `[MIN_SEMI_AXIS, MAX_EXTENT]` (zero, negative, tiny or huge).
     SemiAxisOutOfRange {
@@ -109,13 +109,13 @@ pub enum ObstacleError {
     },
 }
 
-impl core::fmt::Display for ObstacleField {
+impl core::fmt::Display for ObstacleParameter {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
-            ObstacleField::Centre => "centre",
-            ObstacleField::SemiAxes => "semi-axes",
-            ObstacleField::Exponents => "exponents",
-            ObstacleField::Orientation => "orientation",
+            ObstacleParameter::Centre => "centre",
+            ObstacleParameter::SemiAxes => "semi-axes",
+            ObstacleParameter::Exponents => "exponents",
+            ObstacleParameter::Orientation => "orientation",
         })
     }
 }
@@ -419,10 +419,10 @@ impl Obstacle {
         let obstacle = index;
         let not_finite = |field| ObstacleError::NotFinite { obstacle, field };
         let groups = [
-            (s.centre, ObstacleField::Centre),
-            (s.semi_axes, ObstacleField::SemiAxes),
-            (s.exponents, ObstacleField::Exponents),
-            (s.euler_123, ObstacleField::Orientation),
+            (s.centre, ObstacleParameter::Centre),
+            (s.semi_axes, ObstacleParameter::SemiAxes),
+            (s.exponents, ObstacleParameter::Exponents),
+            (s.euler_123, ObstacleParameter::Orientation),
         ];
         for (values, field) in groups {
             if !values.iter().all(|v| v.is_finite()) {
@@ -490,6 +490,42 @@ impl Obstacle {
     /// Orientation `R`: the obstacle's axes as world-frame columns.
     pub fn rotation(&self) -> &Mat3 {
         &self.rotation
+    }
+
+    /// Radius of the sphere about the centre through the corners of the
+    /// shape's bounding box (`|semi-axes|`), length units: its size, for
+    /// deciding whether to go round it.
+    pub fn bounding_radius(&self) -> f32 {
+        let axes = self.source.semi_axes;
+        libm::sqrtf(axes.iter().map(|a| a * a).sum::<f32>())
+    }
+
+    /// How far the shape's bounding box, inflated by `margin`, reaches from
+    /// the centre along the world unit direction `u` (its support in `u`),
+    /// length units: `sum_i |(R^T u)_i| (a_i + margin)`.
+    pub fn box_extent(&self, u: &Vec3, margin: f32) -> f32 {
+        let local = self.rotation.transpose() * u;
+        local
+            .iter()
+            .zip(self.source.semi_axes)
+            .map(|(l, a)| l.abs() * (a + margin))
+            .sum()
+    }
+
+    /// The side of the shape `point` is on: the axis of the obstacle's own
+    /// frame (0, 1, 2 for x, y, z) along which it is farthest out in units
+    /// of the semi-axes, and whether on that axis' positive side.
+    pub fn side_of(&self, point: &Vec3) -> (u8, bool) {
+        let x = self.rotation.transpose() * (point - self.centre());
+        let axes = self.source.semi_axes;
+        let (mut axis, mut far, mut positive) = (0u8, f32::NEG_INFINITY, true);
+        for (i, (&xi, a)) in x.iter().zip(axes).enumerate() {
+            let u = xi.abs() / max(a, f32::MIN_POSITIVE);
+            if u > far {
+                (axis, far, positive) = (i as u8, u, xi >= 0.0);
+            }
+        }
+        (axis, positive)
     }
 
     /// `C(p) - 1`, its gradient and a distance bound for a point of `kind`, or
@@ -1025,7 +1061,7 @@ mod tests {
             check(s),
             ObstacleError::NotFinite {
                 obstacle: 3,
-                field: ObstacleField::Centre
+                field: ObstacleParameter::Centre
             }
         );
         let mut s = good;

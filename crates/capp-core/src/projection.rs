@@ -47,6 +47,12 @@ pub fn strength(clearance: Option<f32>, engage: f32) -> f32 {
     }
 }
 
+/// Fraction of `engage_clearance` (in `C - 1`) below which a step may not
+/// bring the closest pair closer: the arm stops short of resting on an
+/// inflated surface (where `f32` rounding decides contact) instead of
+/// creeping onto it in ever smaller steps.
+pub const CONTACT_FLOOR: f32 = 0.01;
+
 /// A one-sided limit on a step's approach to obstacles, for the laws that
 /// project in their own metric (damped least squares, joint-space moves):
 /// after projection `gradient . dq` is at most [`Guard::allowed`].

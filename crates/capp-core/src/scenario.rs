@@ -1,12 +1,12 @@
 //! Robot, obstacles and mission, validated together into the immutable model
 //! every step reads. Capacities: `N` joints, `M` obstacles, `W` waypoints.
 
-use crate::control::Target;
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{is_rotation, vec3, Mat3};
 use crate::mission::{JointGoalProblem, Mission, MissionError, Settings, Waypoint};
 use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
 use crate::robot::{Joint, Robot, RobotError};
+use crate::target::Target;
 
 /// Most waypoints of a scenario that are joint configurations.
 pub const MAX_JOINT_GOALS: usize = 4;

@@ -39,20 +39,47 @@
 //! convex `C`), or the influence distance for a link no obstacle is near.
 
 use crate::avoidance::HalfSpace;
-use crate::control::PoseError;
 use crate::kinematics::Frames;
 use crate::math::{max, min, Vec3};
-use crate::mission::Settings;
 use crate::robot::{JointKind, Robot};
+use crate::settings_field::{first_bad, non_negative, positive, SettingsField};
+use crate::target::PoseError;
 
 /// Fraction of the Gauss-Newton step taken by [`descent_bound`].
 pub const STEP_FRACTION: f32 = 0.5;
+
+/// The step sizes of the listing's rule ([`listing`]); the planner's
+/// `Settings` holds them at its top level (`crate::Settings::step_rule`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepRule {
+    /// Largest integration step `h_max`, seconds (the listing's `step`).
+    pub time_step_s: f32,
+    /// Position error (length units) under which the step is cut to
+    /// `fine_step_fraction * time_step_s`.
+    pub fine_radius: f32,
+    /// Fraction of the step used inside `fine_radius`, in `(0, 1]`.
+    pub fine_step_fraction: f32,
+}
+
+impl StepRule {
+    /// Checks each value's range.
+    pub fn validate(&self) -> Result<(), SettingsField> {
+        first_bad(&[
+            (positive(self.time_step_s), SettingsField::TimeStep),
+            (non_negative(self.fine_radius), SettingsField::FineRadius),
+            (
+                positive(self.fine_step_fraction) && self.fine_step_fraction <= 1.0,
+                SettingsField::FineStepFraction,
+            ),
+        ])
+    }
+}
 
 /// The listing's step rule for the first-order laws: `h_max` far from the
 /// target, `|err / err_dot| h_max` when the last step's change (`error_step`,
 /// length units) would overshoot the error `err`, and `fine_step_fraction *
 /// h_max` within `fine_radius`.
-pub fn listing(settings: &Settings, error: &PoseError, error_step: f32) -> f32 {
+pub fn listing(settings: &StepRule, error: &PoseError, error_step: f32) -> f32 {
     let h_max = settings.time_step_s;
     let err = error.position;
     if err > settings.fine_radius {
@@ -154,7 +181,7 @@ pub fn advancement<const N: usize>(
             }
         }
         pivot_chain = link.chain;
-        let end_v = w.cross(&frames.origin(j)) + b;
+        let end_v = w.cross(&frames.link_end(j)) + b;
         let first_sq = max(start_v.norm_squared(), end_v.norm_squared());
         let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let pressed = nearest.filter(|h| h.link as usize == j);
@@ -220,7 +247,7 @@ fn sliding_bound<const N: usize>(
 ) -> Option<(f32, f32)> {
     let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
     let mut s = 1.0f32;
-    for (x, v) in [(frames.pivot(j), v0), (frames.origin(j), v1)] {
+    for (x, v) in [(frames.pivot(j), v0), (frames.link_end(j), v1)] {
         let room = normal.dot(&x) - h.offset;
         if room <= 0.0 || room.is_nan() {
             return None;

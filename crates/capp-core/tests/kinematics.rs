@@ -20,7 +20,8 @@ fn pips_forward_kinematics_matches_the_independent_golden_file() {
         assert_eq!(v.len(), 18 + 18 * 3 + 9);
         let q: Vec<f32> = v[..18].iter().map(|&x| x as f32).collect();
         forward_kinematics(&robot, &q, &mut frames);
-        for (k, o) in frames.origins().iter().enumerate() {
+        for k in 0..18 {
+            let o = frames.link_end(k);
             for axis in 0..3 {
                 let expect = v[18 + 3 * k + axis];
                 // f32 over an 18-link, ~150 in chain: a few thousandths of an inch.

@@ -8,10 +8,11 @@
 mod common;
 
 use capp_core::control::damped::{damped_rate, DampedWorkspace};
-use capp_core::control::{pose_error, LawSettings, Target};
+use capp_core::control::{LawInput, LawSettings};
 use capp_core::kinematics::{forward_kinematics, Frames};
 use capp_core::math::{vec3, Mat3};
-use capp_core::projection::Guard;
+use capp_core::step_size::StepRule;
+use capp_core::target::{pose_error, Target};
 use capp_core::{Joint, Robot};
 use common::*;
 
@@ -34,20 +35,25 @@ fn rate(
     };
     let error = pose_error(&frames, target, law.orientation_scale);
     let zeros = vec![0.0; joints.len()];
-    let guard = Guard::at(&zeros, None, 1.0, 0.01);
+    let input = LawInput {
+        robot: &robot,
+        frames: &frames,
+        q,
+        error: &error,
+        mu: &zeros,
+        clearance: None,
+        law: &law,
+        engage_clearance: 1.0,
+        step: StepRule {
+            time_step_s,
+            fine_radius: 0.0,
+            fine_step_fraction: 1.0,
+        },
+        error_step: 0.0,
+    };
     let mut ws = DampedWorkspace::<N>::default();
     let mut out = vec![0.0; joints.len()];
-    damped_rate(
-        &robot,
-        &frames,
-        q,
-        &error,
-        &guard,
-        &law,
-        time_step_s,
-        &mut ws,
-        &mut out,
-    );
+    damped_rate(&input, &mut ws, &mut out);
     out
 }
 

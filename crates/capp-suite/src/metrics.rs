@@ -50,7 +50,7 @@ pub struct EscapeCounts {
     pub walks: u32,
     /// Detours round a blocking obstacle made.
     pub detours: u32,
-    /// Searches for a path made (`capp_core::tree`; each before a walk or a
+    /// Searches for a path made (`capp_core::escape::search`; each before a walk or a
     /// path of the same attempt).
     pub searches: u32,
     /// Paths found by a search and walked.

@@ -37,7 +37,7 @@
 //! * **Damping** (Sugihara's `E + bias`, made scale-free):
 //!   `mu = (b + V / L^2) tr(Lambda J M J^T) / m`, with `m` the task rows in
 //!   use, `L` the robot's reach ([`crate::Robot::reach`]) and `b` =
-//!   [`LawSettings::damping`]. Far from the target (`V / L^2` large) the step
+//!   [`crate::control::LawSettings::damping`]. Far from the target (`V / L^2` large) the step
 //!   leans toward the gradient; near it the damping falls to `b` times the
 //!   mean eigenvalue and the step is Gauss-Newton, which converges
 //!   quadratically in every direction stronger than that; directions weaker
@@ -86,12 +86,14 @@
 //!   those that lower `V` no more slowly than it).
 
 use crate::control::saturation::{saturate, Problem, SaturationWorkspace};
-use crate::control::{joint_weight, time_at_limits, Drive, LawSettings, PoseError};
+use crate::control::{joint_weight, time_at_limits, Drive, LawInput, Proposal};
+
 use crate::kinematics::Frames;
 use crate::linalg::{factor, solve, Sym6, Vec6};
 use crate::math::{dot_slice, max, norm, Vec3};
-use crate::projection::Guard;
-use crate::robot::{JointKind, Robot};
+use crate::projection::{Guard, CONTACT_FLOOR};
+use crate::robot::Robot;
+use crate::target::PoseError;
 
 /// Steps within which the rest of the motion must fit (at the rate limits)
 /// for the final approach, which may come closer to obstacles than the
@@ -148,17 +150,6 @@ impl<const N: usize> DampedWorkspace<N> {
         joint_metric_step.fill(0.0);
         saturation.clear();
     }
-}
-
-/// What the damped law did this step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DampedStep {
-    /// How the direction was formed ([`Drive::Damped`] or [`Drive::Idle`]).
-    pub drive: Drive,
-    /// Whether the obstacle projection changed the step.
-    pub constrained: bool,
-    /// `T`: seconds the undamped-by-speed step needs at the rate limits.
-    pub time_at_limits_s: f32,
 }
 
 /// For `K g = M g - M J^T t`, `t = (J M J^T + mu Lambda^-1)^-1 J M g`: returns
@@ -310,30 +301,33 @@ pub fn rotation_error<const N: usize>(frames: &Frames<N>, error: &PoseError) -> 
     (sin_axis, axis * theta)
 }
 
-/// The damped least-squares step (module docs) for the arm in `frames` at `q`
-/// with pose `error` and the obstacle `guard`; writes the joint rate (per second) into `rate` for a step of
-/// `time_step_s`. All slices hold `robot.len()` values.
-#[allow(clippy::too_many_arguments)]
+/// The damped least-squares step (module docs) for the arm of `input`;
+/// writes the joint rate (per second) into `rate` for a step of
+/// `input.step.time_step_s`, projected against the obstacles (eq. 24, its
+/// guard from `input`'s gradient and closest pair). `rate` holds
+/// `robot.len()` values.
 pub fn damped_rate<const N: usize>(
-    robot: &Robot<N>,
-    frames: &Frames<N>,
-    q: &[f32],
-    error: &PoseError,
-    guard: &Guard<'_>,
-    law: &LawSettings,
-    time_step_s: f32,
+    input: &LawInput<'_, N>,
     ws: &mut DampedWorkspace<N>,
     rate: &mut [f32],
-) -> DampedStep {
+) -> Proposal {
+    let (robot, frames, q, error, law) =
+        (input.robot, input.frames, input.q, input.error, input.law);
+    let time_step_s = input.step.time_step_s;
+    let guard = &Guard::at(
+        input.mu,
+        input.clearance,
+        input.engage_clearance,
+        CONTACT_FLOOR,
+    );
     let n = robot.len();
     let len = n.min(rate.len());
     let rate = &mut rate[..len];
     let idle = |rate: &mut [f32]| {
         rate.fill(0.0);
-        DampedStep {
-            drive: Drive::Idle,
-            constrained: false,
-            time_at_limits_s: 0.0,
+        Proposal {
+            time_step_s,
+            ..Proposal::IDLE
         }
     };
     // Lambda's angular weight (0: no orientation), sigma / 2 = sin(theta) axis
@@ -361,15 +355,11 @@ pub fn damped_rate<const N: usize>(
         .zip(ws.drive.iter_mut())
         .enumerate()
     {
-        let z = frames.axis(j);
-        let angular = if error.has_orientation {
-            z
+        let (linear, angular) = frames.column(j, joint.kind, &p);
+        *column = if error.has_orientation {
+            six(linear, angular)
         } else {
-            Vec3::zeros()
-        };
-        *column = match joint.kind {
-            JointKind::Revolute => six(z.cross(&(p - frames.pivot(j))), angular),
-            JointKind::Prismatic => six(z, Vec3::zeros()),
+            six(linear, Vec3::zeros())
         };
         // G_j = J_j . Lambda eps (eq. 13), whose sign is eq. 18's eta.
         *g = dot6(column, &weighted);
@@ -475,10 +465,11 @@ pub fn damped_rate<const N: usize>(
     }
     let k = 1.0 / max(time_at_limits, time_step_s);
     rate.iter_mut().for_each(|r| *r *= k);
-    DampedStep {
+    Proposal {
         drive: Drive::Damped,
         constrained,
-        time_at_limits_s: time_at_limits,
+        time_step_s,
+        may_rise: constrained,
     }
 }
 
@@ -488,10 +479,12 @@ pub fn damped_rate<const N: usize>(
 mod tests {
     extern crate std;
     use super::*;
-    use crate::control::{pose_error, Target};
+    use crate::control::LawSettings;
     use crate::kinematics::forward_kinematics;
     use crate::math::Mat3;
     use crate::robot::Joint;
+    use crate::step_size::StepRule;
+    use crate::target::{pose_error, Target};
     use std::vec::Vec;
 
     const N: usize = 16;
@@ -590,18 +583,23 @@ mod tests {
             let zeros = [0.0f32; N];
             let mut ws = DampedWorkspace::<N>::default();
             let mut rate = [0.0f32; N];
-            let free = Guard::at(&zeros[..n], None, 1.0, 0.01);
-            damped_rate(
-                &robot,
-                &frames,
-                &q,
-                &error,
-                &free,
-                &law,
-                h,
-                &mut ws,
-                &mut rate[..n],
-            );
+            let free = LawInput {
+                robot: &robot,
+                frames: &frames,
+                q: &q,
+                error: &error,
+                mu: &zeros[..n],
+                clearance: None,
+                law: &law,
+                engage_clearance: 1.0,
+                step: StepRule {
+                    time_step_s: h,
+                    fine_radius: 0.0,
+                    fine_step_fraction: 1.0,
+                },
+                error_step: 0.0,
+            };
+            damped_rate(&free, &mut ws, &mut rate[..n]);
             // A step to project and an obstacle it approaches.
             let scale = rng.uniform(0.02, 2.0) as f32;
             let step: Vec<f32> = rate[..n].iter().map(|r| r * scale).collect();

@@ -3,12 +3,10 @@
 //! [`crate::projection`]), the rate limits, and the listing's step with its
 //! descent and stiffness bounds ([`crate::step_size`]).
 
-use crate::control::{descent_rate, lyapunov_terms, weighted_rate, Drive, PoseError};
-use crate::kinematics::{column_sizes, end_twist, Frames};
+use crate::control::{descent_rate, lyapunov_terms, weighted_rate, LawInput, Proposal};
+use crate::kinematics::{column_sizes, end_twist};
 use crate::math::{all_finite, dot_slice, min};
-use crate::mission::Settings;
-use crate::projection::{limit_rates, project};
-use crate::robot::Robot;
+use crate::projection::{limit_rates, project, strength};
 use crate::step_size;
 
 /// Buffers of the first-order laws, sized once for `N` joints.
@@ -59,26 +57,23 @@ impl<const N: usize> FirstOrderWorkspace<N> {
     }
 }
 
-/// One step's rate (into `rate`, per second) and step size for the arm in
-/// `frames` at `q` with pose `error` and obstacle gradient `mu` (eq. 20):
-/// returns the drive, whether the projection constrained the rate (with
-/// strength `engage`), and `h` (seconds). `error_step` is the position error's
-/// change over the last step (the listing's rule needs it).
-#[allow(clippy::too_many_arguments)]
+/// One step's rate (into `rate`, per second) and step size for the arm of
+/// `input`: the weighted rate (eqs. 15, 18), the Euclidean projection (eq.
+/// 24, its strength from `input`'s closest pair), the rate limits, and the
+/// listing's step with its descent and stiffness bounds. `rate` holds
+/// `robot.len()` values.
 pub fn first_order_rate<const N: usize>(
-    robot: &Robot<N>,
-    frames: &Frames<N>,
-    q: &[f32],
-    error: &PoseError,
-    mu: &[f32],
-    engage: f32,
-    settings: &Settings,
-    error_step: f32,
+    input: &LawInput<'_, N>,
     ws: &mut FirstOrderWorkspace<N>,
     rate: &mut [f32],
-) -> (Drive, bool, f32) {
+) -> Proposal {
+    let (robot, frames, error, law) = (input.robot, input.frames, input.error, input.law);
+    let engage = strength(input.clearance, input.engage_clearance);
     let n = robot.len();
-    let (q, mu) = (&q[..n.min(q.len())], &mu[..n.min(mu.len())]);
+    let (q, mu) = (
+        &input.q[..n.min(input.q.len())],
+        &input.mu[..n.min(input.mu.len())],
+    );
     let len = n.min(rate.len());
     let rate = &mut rate[..len];
     lyapunov_terms(robot, frames, error, &mut ws.terms);
@@ -87,7 +82,7 @@ pub fn first_order_rate<const N: usize>(
         q,
         error,
         &ws.terms,
-        &settings.law,
+        law,
         &mut ws.drive,
         rate,
         &mut ws.gain,
@@ -97,22 +92,22 @@ pub fn first_order_rate<const N: usize>(
     if !all_finite(rate) {
         rate.fill(0.0);
     }
-    let mut h = step_size::listing(settings, error, error_step);
-    let descent = descent_rate(&ws.terms, &settings.law, rate);
+    let mut h = step_size::listing(&input.step, error, input.error_step);
+    let descent = descent_rate(&ws.terms, law, rate);
     if descent > 0.0 {
         let twist = end_twist(robot, frames, rate);
         h = min(
             h,
-            step_size::descent_bound(descent, twist, settings.law.orientation_scale),
+            step_size::descent_bound(descent, twist, law.orientation_scale),
         );
     }
-    column_sizes(
-        robot,
-        frames,
-        settings.law.orientation_scale,
-        &mut ws.columns[..len],
-    );
+    column_sizes(robot, frames, law.orientation_scale, &mut ws.columns[..len]);
     let stiffness = dot_slice(&ws.gain[..len], &ws.columns[..len]);
     h = min(h, step_size::stiffness_bound(stiffness));
-    (drive, constrained, h)
+    Proposal {
+        drive,
+        constrained,
+        time_step_s: h,
+        may_rise: constrained,
+    }
 }

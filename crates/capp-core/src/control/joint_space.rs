@@ -18,10 +18,10 @@
 //! limit, or the whole rest in one step. The planner checks every step like
 //! any other (conservative advancement, clearance).
 
-use crate::control::damped::{DampedStep, FINAL_APPROACH_STEPS};
-use crate::control::{time_at_limits, Drive};
+use crate::control::damped::FINAL_APPROACH_STEPS;
+use crate::control::{time_at_limits, Drive, LawInput, Proposal};
 use crate::math::{dot_slice, max};
-use crate::projection::Guard;
+use crate::projection::{Guard, CONTACT_FLOOR};
 use crate::robot::Robot;
 
 /// How far `q` is from `goal`: seconds for the most loaded joint at its rate
@@ -50,17 +50,25 @@ pub fn joint_v<const N: usize>(robot: &Robot<N>, q: &[f32], goal: &[f32]) -> f32
         .sum::<f32>()
 }
 
-/// The rate (per second, into `rate`) that takes the joints from `q` toward
-/// `goal` at the rate limits, projected against `guard`, for a step of
-/// `time_step_s`. All slices hold `robot.len()` values.
+/// The rate (per second, into `rate`) that takes the joints from
+/// `input.q` toward `goal` at the rate limits, projected against the
+/// obstacles (eq. 24, the guard from `input`'s gradient and closest pair),
+/// for a step of `input.step.time_step_s`. `walk`: an escape's walk, which
+/// may raise `V` (it is leaving a dead end); otherwise only a constrained
+/// step may. `rate` and `goal` hold `robot.len()` values.
 pub fn joint_rate<const N: usize>(
-    robot: &Robot<N>,
-    q: &[f32],
+    input: &LawInput<'_, N>,
     goal: &[f32],
-    guard: &Guard<'_>,
-    time_step_s: f32,
+    walk: bool,
     rate: &mut [f32],
-) -> DampedStep {
+) -> Proposal {
+    let (robot, q, time_step_s) = (input.robot, input.q, input.step.time_step_s);
+    let guard = Guard::at(
+        input.mu,
+        input.clearance,
+        input.engage_clearance,
+        CONTACT_FLOOR,
+    );
     let n = robot.len().min(rate.len());
     let rate = &mut rate[..n];
     for ((r, &qj), &gj) in rate.iter_mut().zip(q).zip(goal) {
@@ -93,17 +101,17 @@ pub fn joint_rate<const N: usize>(
     let time = time_at_limits(robot, rate);
     if !(time > 0.0 && time.is_finite()) {
         rate.fill(0.0);
-        return DampedStep {
-            drive: Drive::Idle,
-            constrained: false,
-            time_at_limits_s: 0.0,
+        return Proposal {
+            time_step_s,
+            ..Proposal::IDLE
         };
     }
     let k = 1.0 / max(time, time_step_s);
     rate.iter_mut().for_each(|r| *r *= k);
-    DampedStep {
+    Proposal {
         drive: Drive::Joints,
         constrained,
-        time_at_limits_s: time,
+        time_step_s,
+        may_rise: constrained || walk,
     }
 }

@@ -51,76 +51,15 @@
 pub mod damped;
 pub mod first_order;
 pub mod joint_space;
+pub mod law;
 pub mod saturation;
 
 use crate::kinematics::{end_direction_error, end_point_force, Frames};
-use crate::math::{dot_slice, max, min, norm_slice, Mat3, Vec3};
+use crate::math::{dot_slice, max, min, norm_slice, Vec3};
 use crate::robot::{Joint, Robot};
-
-/// Where the end effector should go: a position and, optionally, an orientation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Target {
-    /// `r_T4`, length units.
-    pub position: Vec3,
-    /// `R_target` (columns `r_T1..r_T3`), or `None` to ignore orientation.
-    pub orientation: Option<Mat3>,
-    /// A joint configuration to reach instead (index into the scenario's
-    /// joint goals, [`crate::Scenario::joint_goal`]); `position` and
-    /// `orientation` are then its pose, for the reports.
-    pub joints: Option<u8>,
-}
-
-impl Target {
-    /// A pose target (no joint configuration).
-    pub const fn pose(position: Vec3, orientation: Option<Mat3>) -> Self {
-        Target {
-            position,
-            orientation,
-            joints: None,
-        }
-    }
-}
-
-/// The end effector's error from a target (eqs. 11-12).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PoseError {
-    /// `e_1..e_3` (orientation columns, zero when the target has none) and `e_4` (position).
-    pub e: [Vec3; 4],
-    /// `V` of eq. 12 over the active terms, orientation columns weighted by `lambda^2`.
-    pub v: f32,
-    /// `|e_4|`, length units.
-    pub position: f32,
-    /// `sqrt(|e_1|^2 + |e_2|^2 + |e_3|^2)` (the listing's measure), dimensionless.
-    pub orientation: f32,
-    /// Whether the orientation terms are active.
-    pub has_orientation: bool,
-}
-
-/// Errors of the end effector in `frames` from `target`; `V` weighs the
-/// orientation columns by `lambda^2` (`orientation_scale`; 1 gives eq. 12).
-pub fn pose_error<const N: usize>(
-    frames: &Frames<N>,
-    target: &Target,
-    orientation_scale: f32,
-) -> PoseError {
-    let mut e = [Vec3::zeros(); 4];
-    e[3] = target.position - frames.end_position();
-    let position_sq = e[3].dot(&e[3]);
-    let mut orientation_sq = 0.0;
-    if let Some(r_target) = &target.orientation {
-        for (i, ei) in e.iter_mut().take(3).enumerate() {
-            *ei = r_target.column(i) - frames.end_rotation().column(i);
-            orientation_sq += ei.dot(ei);
-        }
-    }
-    PoseError {
-        e,
-        v: 0.5 * (position_sq + orientation_scale * orientation_scale * orientation_sq),
-        position: libm::sqrtf(position_sq),
-        orientation: libm::sqrtf(orientation_sq),
-        has_orientation: target.orientation.is_some(),
-    }
-}
+use crate::settings_field::{first_bad, non_negative, positive, SettingsField};
+use crate::step_size::StepRule;
+use crate::target::PoseError;
 
 /// Which form of the law drives the joints.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -162,6 +101,26 @@ pub struct LawSettings {
     pub saturation: bool,
 }
 
+impl LawSettings {
+    /// Checks each value's range.
+    pub fn validate(&self) -> Result<(), SettingsField> {
+        first_bad(&[
+            (
+                non_negative(self.orientation_scale) && self.orientation_scale <= 1e4,
+                SettingsField::OrientationScale,
+            ),
+            (
+                non_negative(self.approach_radius),
+                SettingsField::ApproachRadius,
+            ),
+            (
+                positive(self.damping) && self.damping <= 1.0,
+                SettingsField::Damping,
+            ),
+        ])
+    }
+}
+
 impl Default for LawSettings {
     fn default() -> Self {
         LawSettings {
@@ -171,29 +130,6 @@ impl Default for LawSettings {
             damping: 1.0e-3,
             saturation: true,
         }
-    }
-}
-
-/// The buffers of both law families, side by side. One enum holding either
-/// would take the larger one's room instead of the sum (928 B less for 32
-/// joints), but switching its variant builds the new workspace on the stack
-/// and moves it: 3.9 KB of stack in every function that inlines the switch,
-/// the firmware's `Run` handler among them (its peak stack went from 5.0 to
-/// 8.3 KB when the damped workspace grew by [`saturation`]'s buffers). Side by
-/// side, nothing is built but in place.
-#[derive(Clone, Debug, Default)]
-pub struct LawWorkspace<const N: usize> {
-    /// [`LawKind::Gradient`] and [`LawKind::Paper`].
-    pub first_order: first_order::FirstOrderWorkspace<N>,
-    /// [`LawKind::DampedLeastSquares`].
-    pub damped: damped::DampedWorkspace<N>,
-}
-
-impl<const N: usize> LawWorkspace<N> {
-    /// Every buffer to zero, in place.
-    pub fn clear(&mut self) {
-        self.first_order.clear();
-        self.damped.clear();
     }
 }
 
@@ -214,6 +150,62 @@ pub fn lyapunov_terms<const N: usize>(
             term[..n].fill(0.0);
         }
     }
+}
+
+/// What every law reads: the arm's configuration and its evaluation (the
+/// frames, the pose error from the target driven to, the obstacle gradient
+/// and the closest pair), the law's settings and the step it plans for.
+/// Built by the planner for each step and by the escape's search for each
+/// imagined one ([`law::propose`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LawInput<'a, const N: usize> {
+    /// The chain.
+    pub robot: &'a Robot<N>,
+    /// The frames at `q` (eqs. 5-6).
+    pub frames: &'a Frames<N>,
+    /// The joint values, `robot.len()` of them (radians or length units).
+    pub q: &'a [f32],
+    /// The pose error from the target driven to (eqs. 11-12).
+    pub error: &'a PoseError,
+    /// The obstacle gradient `mu = dP/dq` (eq. 20), `robot.len()` values.
+    pub mu: &'a [f32],
+    /// `C - 1` of the closest pair within influence, if any (eq. 25).
+    pub clearance: Option<f32>,
+    /// The law's settings.
+    pub law: &'a LawSettings,
+    /// `C - 1` below which the projection engages (see [`crate::projection`]).
+    pub engage_clearance: f32,
+    /// The step planned for: `step.time_step_s` is the horizon of the damped
+    /// and joint-space laws; the first-order laws apply the listing's rule.
+    pub step: StepRule,
+    /// Position error change over the last step, length units (the
+    /// listing's `error_step`; the first-order laws' step rule needs it).
+    pub error_step: f32,
+}
+
+/// What a law proposes for one step: the rate is written into the caller's
+/// buffer; this says how it was formed and how to take it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Proposal {
+    /// How the direction was formed.
+    pub drive: Drive,
+    /// Whether the obstacle projection (eq. 24) changed the rate.
+    pub constrained: bool,
+    /// The step to try first, seconds (before conservative advancement).
+    pub time_step_s: f32,
+    /// Whether the step may raise `V`: a constrained step trades descent for
+    /// clearance, and an escape's walk is leaving a dead end.
+    pub may_rise: bool,
+}
+
+impl Proposal {
+    /// Nothing to do: no rate, no step.
+    pub const IDLE: Proposal = Proposal {
+        drive: Drive::Idle,
+        constrained: false,
+        time_step_s: 0.0,
+        may_rise: false,
+    };
 }
 
 /// How the drive direction was formed.

@@ -1,331 +1,51 @@
 //! The planner: one [`Planner::step`] turns the current joint vector into the
 //! next, following the paper's loop (Fig. 6a) with its open problems closed.
+//! This module is the orchestrator; each policy lives in its own module:
 //!
-//! One step:
+//! 1. **evaluate**: the current configuration's frames, pose error, obstacle
+//!    gradient and clearances are kept from the last accepted step
+//!    ([`crate::evaluation`]); waypoints within tolerance are passed
+//!    (`planner/waypoints.rs`);
+//! 2. **choose the drive goal**: the waypoint, or what the escape drives to
+//!    (a detour's point, a walk's configuration; [`crate::escape`]). While
+//!    the escape searches, the arm holds still and the step runs a slice of
+//!    the search instead;
+//! 3. **propose**: the law's rate, projected against the obstacles (eqs.
+//!    13-18, 24), through one interface for every law
+//!    ([`crate::control::law::propose`]);
+//! 4. **bound**: within the joint limits, and no point travelling farther
+//!    than its clearance allows (conservative advancement; `planner/motion.rs`);
+//! 5. **accept or shorten**: Euler integration `q' = clamp(q + h qdot)`, a
+//!    full evaluation of `q'`, accepted when every avoidance point is clear
+//!    (and not creeping onto a surface) and `V` does not rise unless the
+//!    proposal allows it; else `h` is halved, at most `max_halvings` times,
+//!    and a step with no acceptable size is not taken;
+//! 6. **account**: progress and stall detection (`planner/progress.rs`), the escape's
+//!    bookkeeping, the outcome (`Reached`, `Stalled`, `Capped`).
 //!
-//! 1. pass every waypoint already within tolerance (the last one ends the run);
-//! 2. `g_i = J_i^T e_i` from the current frames (eqs. 13-14, O(n));
-//! 3. the weighted rate `M eps_hat` (eqs. 15, 18; see [`crate::control`]);
-//! 4. the one-sided projection against the obstacle gradient (eq. 24, see
-//!    [`crate::projection`]), then a uniform scale into the joints' rate limits;
-//! 5. the step size `h` by the listing's rule: `h_max` far from the target,
-//!    `|err / err_dot| h_max` when the last step's change would overshoot,
-//!    `fine_step_fraction * h_max` within `fine_radius`; and at most
-//!    `V / (G . qdot)`, the step that would remove all of `V` to first order;
-//! 6. Euler integration `q' = clamp(q + h qdot)` (clamped into the limits) and a
-//!    full evaluation of `q'` (frames, errors, potential gradient, clearance);
-//! 7. acceptance: every avoidance point strictly outside every inflated
-//!    obstacle, and, unless the projection constrained the motion, `V` not
-//!    above its current value. Otherwise `h` is halved (at most `max_halvings`
-//!    times); a step with no acceptable size is not taken (Euler overshoot is
-//!    shortened, never taken);
-//! 8. dead-end detection: `Stalled` when `V` has made no new low (by
-//!    `stall_progress`) within `stall_window` steps; `Capped` at `max_steps`.
-//!
-//! The accepted evaluation is kept for the next step, so a step costs one
-//! forward pass, one potential sweep and O(n) algebra, plus one more pass per
-//! halving. Nothing allocates; the planner is a fixed-size value.
+//! A step costs one forward pass, one potential sweep and O(n) algebra, plus
+//! one more evaluation per halving (the search's slice: a fixed number of
+//! evaluations). Nothing allocates; the planner is a fixed-size value.
 
-use crate::avoidance::{potential_gradient, Clearance, ObstacleField};
-use crate::control::damped::damped_rate;
-use crate::control::first_order::first_order_rate;
-use crate::control::joint_space::{gap, joint_rate, joint_v};
-use crate::control::{pose_error, Drive, LawKind, LawWorkspace, PoseError, Target};
-use crate::escape::{Escape, EscapeState};
-use crate::kinematics::{forward_kinematics, Frames};
-use crate::math::{all_finite, norm};
-use crate::mission::Settings;
-use crate::projection::{strength, Guard};
-use crate::robot::Robot;
+mod motion;
+mod progress;
+mod report;
+mod waypoints;
+
+pub use report::{Outcome, Phase, StartError, StepError, StepReport};
+
+use crate::avoidance::Clearance;
+use crate::control::law::{propose, LawWorkspace};
+use crate::control::{Drive, Proposal};
+use crate::escape::search::Scratch;
+use crate::escape::{worth_escaping, Escape, EscapeState, Leg, Stall};
+use crate::evaluation::{target_error, Evaluations};
+use crate::kinematics::Frames;
+use crate::math::all_finite;
+use crate::projection::CONTACT_FLOOR;
 use crate::scenario::Scenario;
-use crate::step_size::advancement;
-
-mod search;
-
-/// Fraction of `engage_clearance` (in `C - 1`) below which a step may not
-/// bring the closest pair closer: the arm stops short of resting on an
-/// inflated surface (where `f32` rounding decides contact) instead of
-/// creeping onto it in ever smaller steps.
-pub const CONTACT_FLOOR: f32 = 0.01;
-
-/// Pose error, as a fraction of the robot's reach, below which a stall is
-/// `f32` rounding, not a dead end: no escape is tried.
-pub const NUMERIC_FLOOR: f32 = 1.0e-5;
-
-/// A detour's point counts as reached within this fraction of the reach.
-pub const DETOUR_RADIUS: f32 = 0.01;
-
-/// A joint goal is passed when the joints are within this fraction of a
-/// time step of it at their rate limits.
-pub const JOINT_GOAL_TOLERANCE: f32 = 0.05;
-
-/// How a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Outcome {
-    /// The last waypoint was reached within tolerance.
-    Reached,
-    /// No progress in `V` over the stall window: a dead end, an unreachable
-    /// target, or a target inside an obstacle.
-    Stalled,
-    /// The iteration cap was hit while still progressing.
-    Capped,
-}
-
-/// Where the planner is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Phase {
-    /// Driving toward the waypoint with this index.
-    Moving {
-        /// Active waypoint (0-based).
-        waypoint: u8,
-    },
-    /// Finished.
-    Done(Outcome),
-}
-
-/// Why a planner could not start, or could not take a step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum StartError {
-    /// The start vector's length is not the robot's joint count.
-    WrongLength {
-        /// Values given.
-        given: usize,
-        /// Joints of the robot.
-        joints: usize,
-    },
-    /// A start value is NaN or infinite.
-    NotFinite {
-        /// The joint (0-based).
-        joint: u8,
-    },
-    /// A start value is outside the joint's limits.
-    OutsideLimits {
-        /// The joint (0-based).
-        joint: u8,
-    },
-    /// An avoidance point starts inside (or on) an inflated obstacle.
-    InObstacle {
-        /// Avoidance point id.
-        point: u16,
-        /// Obstacle index.
-        obstacle: u8,
-    },
-    /// `step` was given a scenario with another joint count than `new`.
-    ScenarioMismatch,
-}
-
-impl core::fmt::Display for StartError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            StartError::WrongLength { given, joints } => {
-                write!(
-                    f,
-                    "start configuration has {given} values for {joints} joints"
-                )
-            }
-            StartError::NotFinite { joint } => {
-                write!(f, "start value of joint {} is not finite", joint as u32 + 1)
-            }
-            StartError::OutsideLimits { joint } => {
-                write!(
-                    f,
-                    "start value of joint {} is outside its limits",
-                    joint as u32 + 1
-                )
-            }
-            StartError::InObstacle { point, obstacle } => write!(
-                f,
-                "start configuration puts avoidance point {point} inside obstacle {}",
-                obstacle as u32 + 1
-            ),
-            StartError::ScenarioMismatch => {
-                write!(f, "the scenario does not match the planner's robot")
-            }
-        }
-    }
-}
-
-/// What one step did, and where the arm now is.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct StepReport {
-    /// Steps taken so far (this one included).
-    pub step: u32,
-    /// Integration step used, seconds (0 when no step could be taken).
-    pub time_step_s: f32,
-    /// `V` of eq. 12 at the new configuration, for the active waypoint.
-    pub v: f32,
-    /// Position error, length units.
-    pub position_error: f32,
-    /// Orientation error (root sum square of the column errors).
-    pub orientation_error: f32,
-    /// Closest avoidance point / obstacle pair within influence.
-    pub clearance: Option<Clearance>,
-    /// Phase after this step (the active waypoint while moving).
-    pub phase: Phase,
-    /// Whether the obstacle projection changed the rate.
-    pub constrained: bool,
-    /// How many times the step was halved.
-    pub halvings: u8,
-    /// Whether the planner is escaping a dead end, and which attempt.
-    pub escape: EscapeState,
-}
-
-/// The error from `target` of the arm at `q` (frames `frames`): the pose
-/// error (eqs. 11-12); for a joint goal, with `V` the joint-space distance
-/// ([`joint_v`]).
-fn target_error<const N: usize, const M: usize, const W: usize>(
-    scenario: &Scenario<N, M, W>,
-    frames: &Frames<N>,
-    q: &[f32],
-    target: &Target,
-) -> PoseError {
-    let mut e = pose_error(frames, target, scenario.settings().law.orientation_scale);
-    if let Some(goal) = target.joints.and_then(|k| scenario.joint_goal(k)) {
-        e.v = joint_v(scenario.robot(), q, goal);
-    }
-    e
-}
-
-/// Everything known about one configuration.
-#[derive(Clone, Debug)]
-struct Evaluation<const N: usize> {
-    frames: Frames<N>,
-    error: PoseError,
-    mu: [f32; N],
-    /// Per link, the square of a lower bound on its points' distance to any
-    /// inflated obstacle.
-    distance_sq: [f32; N],
-    field: ObstacleField,
-}
-
-impl<const N: usize> Evaluation<N> {
-    fn new() -> Self {
-        Evaluation {
-            frames: Frames::default(),
-            error: PoseError::default(),
-            mu: [0.0; N],
-            distance_sq: [0.0; N],
-            field: ObstacleField::default(),
-        }
-    }
-
-    /// Every field to its initial value, in place.
-    fn reset(&mut self) {
-        // Every field is named: a field added to `Evaluation` fails to compile here.
-        let Evaluation {
-            frames,
-            error,
-            mu,
-            distance_sq,
-            field,
-        } = self;
-        *frames = Frames::default();
-        *error = PoseError::default();
-        mu.fill(0.0);
-        distance_sq.fill(0.0);
-        *field = ObstacleField::default();
-    }
-
-    /// `C - 1` of the closest pair within influence (infinity: none).
-    fn closest(&self) -> f32 {
-        self.field.clearance.map_or(f32::INFINITY, |c| c.value)
-    }
-
-    /// Whether a step may end here, coming from a configuration whose
-    /// closest pair was at `c_from`: every point clear, and not creeping onto
-    /// a surface (below `floor` the closest clearance may not shrink).
-    fn safe_after(&self, c_from: f32, floor: f32) -> bool {
-        let c = self.closest();
-        self.field.clear && (c >= floor || c >= c_from)
-    }
-
-    fn evaluate<const M: usize, const W: usize>(
-        &mut self,
-        scenario: &Scenario<N, M, W>,
-        q: &[f32],
-        target: &Target,
-    ) {
-        let robot = scenario.robot();
-        forward_kinematics(robot, q, &mut self.frames);
-        self.error = target_error(scenario, &self.frames, q, target);
-        self.field = potential_gradient(
-            robot,
-            &self.frames,
-            scenario.obstacles(),
-            &scenario.settings().avoidance,
-            &mut self.mu,
-            &mut self.distance_sq,
-        );
-    }
-}
-
-/// The evaluation of the current configuration (`now`) and of the candidate
-/// (`next`), in two slots: accepting the candidate swaps their roles, not
-/// their contents (an evaluation is some 700 bytes for PIPS).
-#[derive(Clone, Debug)]
-struct Evaluations<const N: usize> {
-    slots: [Evaluation<N>; 2],
-    /// The slot of `now` (0 or 1); `next` is the other.
-    now: usize,
-}
-
-impl<const N: usize> Evaluations<N> {
-    fn new() -> Self {
-        Evaluations {
-            slots: [Evaluation::new(), Evaluation::new()],
-            now: 0,
-        }
-    }
-
-    /// Both evaluations to their initial values, in place.
-    fn reset(&mut self) {
-        self.slots.iter_mut().for_each(Evaluation::reset);
-        self.now = 0;
-    }
-
-    // `& 1`: the index is provably in bounds (no panic path).
-    #[inline(always)]
-    fn now(&self) -> &Evaluation<N> {
-        &self.slots[self.now & 1]
-    }
-
-    #[inline(always)]
-    fn now_mut(&mut self) -> &mut Evaluation<N> {
-        &mut self.slots[self.now & 1]
-    }
-
-    #[inline(always)]
-    fn next(&self) -> &Evaluation<N> {
-        &self.slots[(self.now & 1) ^ 1]
-    }
-
-    #[inline(always)]
-    fn next_mut(&mut self) -> &mut Evaluation<N> {
-        &mut self.slots[(self.now & 1) ^ 1]
-    }
-
-    /// `(now, next)`, both writable.
-    #[inline(always)]
-    fn both_mut(&mut self) -> (&mut Evaluation<N>, &mut Evaluation<N>) {
-        let [a, b] = &mut self.slots;
-        if self.now & 1 == 0 {
-            (a, b)
-        } else {
-            (b, a)
-        }
-    }
-
-    /// The candidate becomes the current evaluation (and the old current
-    /// one the slot the next candidate is evaluated into).
-    #[inline(always)]
-    fn accept(&mut self) {
-        self.now ^= 1;
-    }
-}
+use crate::target::{pose_error, Target};
+use progress::Progress;
 
 /// The planner's mutable state: the joint vector and every buffer a step
 /// needs, sized once for `N` joints. The model ([`Scenario`]) is passed to
@@ -346,8 +66,8 @@ pub struct Planner<const N: usize> {
     phase: Phase,
     /// Position error change over the last step (the listing's `error_step`).
     error_step: f32,
-    best_v: f32,
-    best_step: u32,
+    /// The lowest `V` of the current waypoint and when: stall detection.
+    progress: Progress,
     last: StepReport,
 }
 
@@ -378,8 +98,7 @@ impl<const N: usize> Planner<N> {
             step: 0,
             phase: Phase::Done(Outcome::Stalled),
             error_step: 0.0,
-            best_v: f32::INFINITY,
-            best_step: 0,
+            progress: Progress::new(),
             last: StepReport {
                 step: 0,
                 time_step_s: 0.0,
@@ -457,7 +176,7 @@ impl<const N: usize> Planner<N> {
                 obstacle: c.obstacle,
             });
         }
-        self.best_v = self.evals.now().error.v;
+        self.progress.restart(self.evals.now().error.v, 0);
         self.last = self.report(0.0, false, 0);
         Ok(())
     }
@@ -477,8 +196,7 @@ impl<const N: usize> Planner<N> {
             step,
             phase,
             error_step,
-            best_v,
-            best_step,
+            progress,
             last,
         } = self;
         let len = start.len().min(N);
@@ -497,8 +215,7 @@ impl<const N: usize> Planner<N> {
             Phase::Moving { waypoint: 0 }
         };
         *error_step = 0.0;
-        *best_v = f32::INFINITY;
-        *best_step = 0;
+        *progress = Progress::new();
         *last = StepReport {
             step: 0,
             time_step_s: 0.0,
@@ -563,162 +280,6 @@ impl<const N: usize> Planner<N> {
         }
     }
 
-    /// Moves on past every waypoint within tolerance of the current pose.
-    fn pass_waypoints<const M: usize, const W: usize>(&mut self, scenario: &Scenario<N, M, W>) {
-        let settings = scenario.settings();
-        let targets = scenario.targets();
-        let n = self.n.min(N);
-        while let Phase::Moving { waypoint } = self.phase {
-            let Some(target) = targets.get(waypoint as usize) else {
-                return;
-            };
-            let within = match target.joints.and_then(|k| scenario.joint_goal(k)) {
-                // A joint goal: within a twentieth of a step of it.
-                Some(goal) => {
-                    gap(scenario.robot(), &self.q[..n], goal)
-                        <= JOINT_GOAL_TOLERANCE * settings.time_step_s
-                }
-                None => {
-                    // While detouring, `now.error` is the detour point's; the
-                    // waypoint is judged by its own.
-                    let e = match self.escape.subgoal() {
-                        Some(_) => pose_error(
-                            &self.evals.now().frames,
-                            target,
-                            settings.law.orientation_scale,
-                        ),
-                        None => self.evals.now().error,
-                    };
-                    e.position <= settings.position_tolerance
-                        && (!e.has_orientation || e.orientation <= settings.orientation_tolerance)
-                }
-            };
-            if !within {
-                return;
-            }
-            let next = waypoint as usize + 1;
-            if next >= targets.len() {
-                self.phase = Phase::Done(Outcome::Reached);
-                return;
-            }
-            self.phase = Phase::Moving {
-                waypoint: next as u8,
-            };
-            if let Some(target) = targets.get(next) {
-                self.evals.now_mut().error =
-                    target_error(scenario, &self.evals.now().frames, &self.q[..n], target);
-            }
-            self.best_v = self.evals.now().error.v;
-            self.best_step = self.step;
-            self.error_step = 0.0;
-            self.escape
-                .next_waypoint(&self.q[..n], self.evals.now().error.v);
-        }
-    }
-
-    /// Whether the law has made no progress for long enough to call it a
-    /// dead end: the escape's window for the damped law, which converges in
-    /// tens of steps; the stall window for the first-order laws, which creep
-    /// (and for every law with escapes off).
-    fn stalled(&self, settings: &Settings) -> bool {
-        let fast = settings.law.kind == LawKind::DampedLeastSquares;
-        let window = if settings.escape.attempts > 0 && fast {
-            settings.escape.window as u32
-        } else {
-            settings.stall_window
-        };
-        self.step - self.best_step >= window
-    }
-
-    /// A dead end: escape, or (escapes off, or spent and back at the best
-    /// configuration) end `Stalled`.
-    fn on_stall<const M: usize, const W: usize>(
-        &mut self,
-        scenario: &Scenario<N, M, W>,
-        target: &Target,
-    ) {
-        let settings = scenario.settings();
-        // Within f32 noise of the target there is nothing to escape from.
-        let noise = if target.joints.is_some() {
-            NUMERIC_FLOOR // seconds, for a joint goal's V
-        } else {
-            NUMERIC_FLOOR * scenario.robot().reach()
-        };
-        // Farther from the base than the whole chain: no configuration
-        // reaches it, so there is nothing to escape to.
-        let out_of_reach = target.joints.is_none()
-            && norm(&target.position) > scenario.robot().reach() + settings.position_tolerance;
-        if settings.escape.attempts == 0
-            || out_of_reach
-            || self.evals.now().error.v <= 0.5 * noise * noise
-        {
-            self.phase = Phase::Done(Outcome::Stalled);
-            return;
-        }
-        let n = self.n.min(N);
-        let (now, next) = self.evals.both_mut();
-        self.escape.on_stall(
-            &settings.escape,
-            scenario.robot(),
-            scenario.obstacles(),
-            &self.q[..n],
-            &now.frames,
-            now.error.v,
-            &now.mu[..n],
-            now.field.clearance.map(|c| c.obstacle),
-            target.position,
-            settings.avoidance.joint_margin,
-            &mut next.frames,
-        );
-        // A detour begins: from now on `now.error` is its point's (the
-        // configuration does not change until the next step; later steps
-        // evaluate against the point).
-        if let Some(point) = self.escape.subgoal() {
-            self.evals.now_mut().error = pose_error(
-                &self.evals.now().frames,
-                &Target::pose(point, None),
-                settings.law.orientation_scale,
-            );
-        }
-    }
-
-    /// After a step of a walk or a detour: is it over? A finished walk or
-    /// detour hands back to the law (toward `target`) with a fresh stall
-    /// window; a finished return ends `Stalled`.
-    fn after_escape_step<const M: usize, const W: usize>(
-        &mut self,
-        scenario: &Scenario<N, M, W>,
-        target: &Target,
-    ) {
-        let (settings, robot) = (scenario.settings(), scenario.robot());
-        let n = self.n.min(N);
-        let (gap, reached) = if let Some(point) = self.escape.subgoal() {
-            let radius = DETOUR_RADIUS * robot.reach();
-            (
-                norm(&(point - self.evals.now().frames.end_position())),
-                radius,
-            )
-        } else if let Some(goal) = self.escape.goal() {
-            (
-                gap(robot, &self.q[..n], &goal[..n]),
-                0.1 * settings.time_step_s,
-            )
-        } else {
-            return;
-        };
-        let returning = self.escape.state() == EscapeState::Returning;
-        if self.escape.walked(&settings.escape, gap, reached) {
-            if returning {
-                self.phase = Phase::Done(Outcome::Stalled);
-            }
-            // Back to the target: its error, and a fresh stall window.
-            self.evals.now_mut().error =
-                target_error(scenario, &self.evals.now().frames, &self.q[..n], target);
-            self.best_v = self.evals.now().error.v;
-            self.best_step = self.step;
-        }
-    }
-
     /// Takes one planning step. Returns the report; a finished planner returns
     /// its final report again without moving.
     // Not inlined: the board's serving loop reaches it from two places, and
@@ -727,162 +288,136 @@ impl<const N: usize> Planner<N> {
     pub fn step<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
-    ) -> Result<StepReport, StartError> {
-        let robot: &Robot<N> = scenario.robot();
-        if robot.len() != self.n {
-            return Err(StartError::ScenarioMismatch);
+    ) -> Result<StepReport, StepError> {
+        if scenario.robot().len() != self.n {
+            return Err(StepError::ScenarioMismatch);
         }
         // self.n <= N always; the `min` lets the optimiser drop the bounds checks.
         let n = self.n.min(N);
-        let settings = *scenario.settings();
+        // 1. Evaluate: the waypoints already within tolerance are passed.
         self.pass_waypoints(scenario);
-        let waypoint = match self.phase {
-            Phase::Done(_) => {
-                self.last = self.report(0.0, false, 0);
-                return Ok(self.last);
+        let Some(target) = self.active_target(scenario)? else {
+            self.last = self.report(0.0, false, 0);
+            return Ok(self.last);
+        };
+        if self.escape.is_searching() {
+            return Ok(self.search_step(scenario, &target));
+        }
+        // 2. The drive goal: the waypoint, a detour's point or a walk's goal.
+        let escaping = self.escape.is_escaping();
+        let (drive_target, goal) = self.escape.drive_goal(scenario, &target);
+        // 3. Propose (eqs. 13-18, 24).
+        let input = self
+            .evals
+            .now()
+            .law_input(scenario, &self.q[..n], self.error_step);
+        let proposal = propose(&input, goal, &mut self.law, &mut self.rate[..n]);
+        // 4. Bound: the joint limits, conservative advancement.
+        let h = motion::bound(
+            scenario,
+            self.evals.now(),
+            &self.q[..n],
+            &mut self.rate[..n],
+            proposal.time_step_s,
+        );
+        // 5. Accept or shorten.
+        let (accepted, h, halvings) = self.take(scenario, &drive_target, &proposal, h);
+        // 6. Account: progress, the escape, the outcome.
+        self.account(scenario, &target, escaping, accepted);
+        self.last = self.report_step(scenario, &target, h, proposal.constrained, halvings);
+        Ok(self.last)
+    }
+
+    /// Runs until done, calling `visit` after every step. Returns the outcome.
+    pub fn run<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        mut visit: impl FnMut(&Self, &StepReport),
+    ) -> Result<Outcome, StepError> {
+        loop {
+            let report = self.step(scenario)?;
+            visit(self, &report);
+            if let Phase::Done(outcome) = report.phase {
+                return Ok(outcome);
             }
+        }
+    }
+
+    /// The active waypoint's target, or `None` when the run is over (done
+    /// before, or the step cap reached now).
+    fn active_target<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+    ) -> Result<Option<Target>, StepError> {
+        let waypoint = match self.phase {
+            Phase::Done(_) => return Ok(None),
             Phase::Moving { waypoint } => waypoint as usize,
         };
-        let Some(target) = scenario.targets().get(waypoint).copied() else {
-            return Err(StartError::ScenarioMismatch);
+        let Some(&target) = scenario.targets().get(waypoint) else {
+            return Err(StepError::ScenarioMismatch);
         };
-        if self.step >= settings.max_steps {
+        if self.step >= scenario.settings().max_steps {
             self.phase = Phase::Done(Outcome::Capped);
-            self.last = self.report(0.0, false, 0);
-            return Ok(self.last);
+            return Ok(None);
         }
-        // Searching for a path: the arm holds still while a slice of the
-        // search runs; a path found is walked, else this attempt's walk.
-        if matches!(self.escape.state(), EscapeState::Searching { .. }) {
-            match self.search_slice(scenario, &target) {
-                search::Slice::Working => {}
-                search::Slice::Found => self.escape.follow(),
-                search::Slice::Failed => self.escape.search_failed(),
-            }
-            self.step += 1;
-            self.rate[..n].fill(0.0);
-            if self.step >= settings.max_steps {
-                self.phase = Phase::Done(Outcome::Capped);
-            }
-            self.last = self.report(0.0, false, 0);
-            return Ok(self.last);
-        }
-        // What the law drives to: the target, or a detour's point beside the
-        // obstacle that blocked it (position only).
-        let detour = self.escape.subgoal();
-        let drive_target = match detour {
-            Some(point) => Target::pose(point, None),
-            None => target,
-        };
+        Ok(Some(target))
+    }
 
-        // The law proposes a rate and a step (eqs. 13-18, 24).
-        let engage = strength(
-            self.evals.now().field.clearance.map(|c| c.value),
-            settings.avoidance.engage_clearance,
-        );
-        let guard = Guard::at(
-            &self.evals.now().mu[..n],
-            self.evals.now().field.clearance.map(|c| c.value),
-            settings.avoidance.engage_clearance,
-            CONTACT_FLOOR,
-        );
-        let walking = self.escape.goal().is_some();
-        let escaping = walking || detour.is_some();
-        // Straight in joint space: an escape walk, or a joint goal.
-        let joint_goal = match (self.escape.goal(), drive_target.joints) {
-            (Some(goal), _) => Some(&goal[..n]),
-            (None, Some(k)) => scenario.joint_goal(k),
-            (None, None) => None,
+    /// A step of the escape's search: the arm holds still while a slice of
+    /// it runs in the candidate's buffers.
+    fn search_step<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+    ) -> StepReport {
+        let scratch = Scratch {
+            next: self.evals.next_mut(),
+            q: &mut self.q_next,
+            rate: &mut self.rate,
+            law: &mut self.law,
         };
-        let (drive, constrained, mut h) = match (joint_goal, settings.law.kind) {
-            (Some(goal), _) => {
-                let step = joint_rate(
-                    robot,
-                    &self.q[..n],
-                    goal,
-                    &guard,
-                    settings.time_step_s,
-                    &mut self.rate[..n],
-                );
-                (step.drive, step.constrained, settings.time_step_s)
-            }
-            (None, LawKind::Gradient | LawKind::Paper) => first_order_rate(
-                robot,
-                &self.evals.now().frames,
-                &self.q[..n],
-                &self.evals.now().error,
-                &self.evals.now().mu[..n],
-                engage,
-                &settings,
-                self.error_step,
-                &mut self.law.first_order,
-                &mut self.rate[..n],
-            ),
-            (None, LawKind::DampedLeastSquares) => {
-                let step = damped_rate(
-                    robot,
-                    &self.evals.now().frames,
-                    &self.q[..n],
-                    &self.evals.now().error,
-                    &guard,
-                    &settings.law,
-                    settings.time_step_s,
-                    &mut self.law.damped,
-                    &mut self.rate[..n],
-                );
-                (step.drive, step.constrained, settings.time_step_s)
-            }
-        };
-        if !all_finite(&self.rate[..n]) {
-            self.rate[..n].fill(0.0);
+        self.escape.search_step(scenario, target, scratch);
+        self.step += 1;
+        self.rate[..self.n.min(N)].fill(0.0);
+        if self.step >= scenario.settings().max_steps {
+            self.phase = Phase::Done(Outcome::Capped);
         }
-        // A joint that would pass a limit within h stops at it: the step is
-        // the straight segment to the clamped point, so every shorter step is
-        // a part of it and stays within the limits.
-        if h > 0.0 {
-            for ((r, &qj), joint) in self.rate[..n]
-                .iter_mut()
-                .zip(&self.q[..n])
-                .zip(robot.joints())
-            {
-                let end = joint.clamp(qj + h * *r);
-                if end != qj + h * *r {
-                    *r = (end - qj) / h;
-                }
-            }
-        }
+        self.last = self.report(0.0, false, 0);
+        self.last
+    }
+
+    /// Integrates the proposed rate over `h`, evaluates the candidate against
+    /// `drive_target` and accepts it, or halves `h` and tries again (at most
+    /// `max_halvings` times). Counts the step. Returns whether a step was
+    /// taken, its size (0 if none) and the halvings.
+    fn take<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        drive_target: &Target,
+        proposal: &Proposal,
+        mut h: f32,
+    ) -> (bool, f32, u8) {
+        let (settings, robot) = (scenario.settings(), scenario.robot());
+        let n = self.n.min(N);
         let err = self.evals.now().error.position;
-        // No point may travel farther than a fraction of its clearance.
-        h = advancement(
-            robot,
-            &self.evals.now().frames,
-            &self.evals.now().distance_sq[..n],
-            self.evals.now().field.nearest.as_ref(),
-            &self.rate[..n],
-            h,
-            settings.avoidance.advance_fraction,
-        );
-
-        // Integrate, evaluate, accept or halve.
+        let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
         let mut halvings = 0;
         let mut accepted = false;
-        if drive != Drive::Idle || constrained {
+        if proposal.drive != Drive::Idle || proposal.constrained {
             loop {
-                for j in 0..n {
-                    let joint = &robot.joints()[j];
-                    self.q_next[j] = joint.clamp(self.q[j] + h * self.rate[j]);
-                }
+                motion::integrate(
+                    robot,
+                    &self.q[..n],
+                    &self.rate[..n],
+                    h,
+                    &mut self.q_next[..n],
+                );
                 self.evals
                     .next_mut()
-                    .evaluate(scenario, &self.q_next[..n], &drive_target);
-                let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
-                let safe = self
-                    .evals
-                    .next()
-                    .safe_after(self.evals.now().closest(), floor);
-                // A walk may climb V: it is leaving a dead end.
-                let descends =
-                    constrained || walking || self.evals.next().error.v <= self.evals.now().error.v;
+                    .evaluate(scenario, &self.q_next[..n], drive_target);
+                let (now, next) = (self.evals.now(), self.evals.next());
+                let safe = next.safe_after(now.closest(), floor);
+                let descends = proposal.may_rise || next.error.v <= now.error.v;
                 if safe && descends && all_finite(&self.q_next[..n]) {
                     accepted = true;
                     break;
@@ -903,55 +438,143 @@ impl<const N: usize> Planner<N> {
             h = 0.0;
             self.rate[..n].fill(0.0);
         }
+        (accepted, h, halvings)
+    }
 
-        // Progress and outcome.
+    /// After a step: progress toward `target` (or the escape's leg), the
+    /// waypoints passed, a dead end met, the step cap.
+    fn account<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+        escaping: bool,
+        accepted: bool,
+    ) {
+        let settings = scenario.settings();
+        let n = self.n.min(N);
         if escaping {
-            self.after_escape_step(scenario, &target);
-        } else {
-            if self.evals.now().error.v < self.best_v * (1.0 - settings.stall_progress) {
-                self.best_v = self.evals.now().error.v;
-                self.best_step = self.step;
+            let leg = self
+                .escape
+                .after_step(scenario, &self.q[..n], &self.evals.now().frames);
+            if leg == Leg::Returned {
+                self.phase = Phase::Done(Outcome::Stalled);
             }
-            self.escape.record(&self.q[..n], self.evals.now().error.v);
+            if leg != Leg::Going {
+                // Back to the target: its error, and a fresh stall window.
+                self.retarget(scenario, target);
+            }
+        } else {
+            let v = self.evals.now().error.v;
+            self.progress.observe(v, self.step, settings.stall_progress);
+            self.escape.record(&self.q[..n], v);
         }
         self.pass_waypoints(scenario);
         if let Phase::Moving { .. } = self.phase {
             // A refused step left the state as it was, so the next one would
             // be refused the same way: a dead end now, not after the window.
-            if !escaping && (!accepted || self.stalled(&settings)) {
-                self.on_stall(scenario, &target);
+            if !escaping && (!accepted || self.progress.stalled(settings, self.step)) {
+                self.on_stall(scenario, target);
             }
             if self.step >= settings.max_steps && !self.is_done() {
                 self.phase = Phase::Done(Outcome::Capped);
             }
         }
-        self.last = self.report(h, constrained, halvings);
-        if self.escape.subgoal().is_some() {
-            // Report the target's errors, not the detour point's.
-            let e = pose_error(
-                &self.evals.now().frames,
-                &target,
-                settings.law.orientation_scale,
-            );
-            self.last.v = e.v;
-            self.last.position_error = e.position;
-            self.last.orientation_error = e.orientation;
-        }
-        Ok(self.last)
     }
 
-    /// Runs until done, calling `visit` after every step. Returns the outcome.
-    pub fn run<const M: usize, const W: usize>(
+    /// The current configuration's error from `target`, and a fresh stall
+    /// window from it.
+    fn retarget<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
-        mut visit: impl FnMut(&Self, &StepReport),
-    ) -> Result<Outcome, StartError> {
-        loop {
-            let report = self.step(scenario)?;
-            visit(self, &report);
-            if let Phase::Done(outcome) = report.phase {
-                return Ok(outcome);
-            }
+        target: &Target,
+    ) {
+        let n = self.n.min(N);
+        let now = self.evals.now_mut();
+        now.error = target_error(scenario, &now.frames, &self.q[..n], target);
+        self.progress.restart(now.error.v, self.step);
+    }
+
+    /// A dead end short of `target`: escape, or (nothing to escape from, or
+    /// escapes off) end `Stalled`.
+    fn on_stall<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+    ) {
+        let n = self.n.min(N);
+        if !worth_escaping(scenario, target, self.evals.now().error.v) {
+            self.phase = Phase::Done(Outcome::Stalled);
+            return;
         }
+        let (now, next) = self.evals.both_mut();
+        let stall = Stall::at(&self.q[..n], now, target);
+        self.escape.on_stall(scenario, &stall, &mut next.frames);
+        // A detour begins: from now on `now.error` is its point's (the
+        // configuration does not change until the next step; later steps
+        // evaluate against the point).
+        if let Some(point) = self.escape.subgoal() {
+            let now = self.evals.now_mut();
+            now.error = pose_error(
+                &now.frames,
+                &Target::pose(point, None),
+                scenario.settings().law.orientation_scale,
+            );
+        }
+    }
+
+    /// Moves on past every waypoint within tolerance of the current pose.
+    fn pass_waypoints<const M: usize, const W: usize>(&mut self, scenario: &Scenario<N, M, W>) {
+        let targets = scenario.targets();
+        let n = self.n.min(N);
+        while let Phase::Moving { waypoint } = self.phase {
+            let Some(target) = targets.get(waypoint as usize) else {
+                return;
+            };
+            let now = self.evals.now();
+            let detouring = self.escape.subgoal().is_some();
+            if !waypoints::within(scenario, &self.q[..n], now, target, detouring) {
+                return;
+            }
+            let next = waypoint as usize + 1;
+            if next >= targets.len() {
+                self.phase = Phase::Done(Outcome::Reached);
+                return;
+            }
+            self.phase = Phase::Moving {
+                waypoint: next as u8,
+            };
+            if let Some(target) = targets.get(next) {
+                let now = self.evals.now_mut();
+                now.error = target_error(scenario, &now.frames, &self.q[..n], target);
+            }
+            let v = self.evals.now().error.v;
+            self.progress.restart(v, self.step);
+            self.error_step = 0.0;
+            self.escape.next_waypoint(&self.q[..n], v);
+        }
+    }
+
+    /// The report of a step that aimed at `target`: during a detour, the
+    /// target's errors, not the detour point's.
+    fn report_step<const M: usize, const W: usize>(
+        &self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+        h: f32,
+        constrained: bool,
+        halvings: u8,
+    ) -> StepReport {
+        let mut report = self.report(h, constrained, halvings);
+        if self.escape.subgoal().is_some() {
+            let e = pose_error(
+                &self.evals.now().frames,
+                target,
+                scenario.settings().law.orientation_scale,
+            );
+            report.v = e.v;
+            report.position_error = e.position;
+            report.orientation_error = e.orientation;
+        }
+        report
     }
 }

@@ -1,0 +1,215 @@
+//! Everything known about one configuration: its frames, its error from
+//! the target, the obstacle gradient and clearances; and the planner's two
+//! slots of them (the current configuration and the candidate). The escape's
+//! search evaluates its imagined configurations into the candidate slot.
+
+use crate::avoidance::{potential_gradient, ObstacleField};
+use crate::control::joint_space::joint_v;
+use crate::control::LawInput;
+use crate::kinematics::{forward_kinematics, Frames};
+use crate::scenario::Scenario;
+use crate::target::{pose_error, PoseError, Target};
+
+/// The error from `target` of the arm at `q` (frames `frames`): the pose
+/// error (eqs. 11-12); for a joint goal, with `V` the joint-space distance
+/// ([`joint_v`]).
+pub fn target_error<const N: usize, const M: usize, const W: usize>(
+    scenario: &Scenario<N, M, W>,
+    frames: &Frames<N>,
+    q: &[f32],
+    target: &Target,
+) -> PoseError {
+    let mut e = pose_error(frames, target, scenario.settings().law.orientation_scale);
+    if let Some(goal) = target.joints.and_then(|k| scenario.joint_goal(k)) {
+        e.v = joint_v(scenario.robot(), q, goal);
+    }
+    e
+}
+
+/// Everything known about one configuration.
+#[derive(Clone, Debug)]
+pub struct Evaluation<const N: usize> {
+    /// Every frame of the chain (eqs. 5-6).
+    pub frames: Frames<N>,
+    /// The pose error from the target evaluated against (eqs. 11-12).
+    pub error: PoseError,
+    /// The obstacle gradient `mu = dP/dq` (eq. 20).
+    pub mu: [f32; N],
+    /// Per link, the square of a lower bound on its points' distance to any
+    /// inflated obstacle.
+    pub distance_sq: [f32; N],
+    /// What the obstacles say (eq. 26's potential, the closest pair, ...).
+    pub field: ObstacleField,
+}
+
+impl<const N: usize> Default for Evaluation<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Evaluation<N> {
+    /// Nothing evaluated yet.
+    pub fn new() -> Self {
+        Evaluation {
+            frames: Frames::default(),
+            error: PoseError::default(),
+            mu: [0.0; N],
+            distance_sq: [0.0; N],
+            field: ObstacleField::default(),
+        }
+    }
+
+    /// Every field to its initial value, in place.
+    pub fn reset(&mut self) {
+        // Every field is named: a field added to `Evaluation` fails to compile here.
+        let Evaluation {
+            frames,
+            error,
+            mu,
+            distance_sq,
+            field,
+        } = self;
+        *frames = Frames::default();
+        *error = PoseError::default();
+        mu.fill(0.0);
+        distance_sq.fill(0.0);
+        *field = ObstacleField::default();
+    }
+
+    /// What a law reads of this evaluation, for the arm at `q` (the
+    /// configuration evaluated) whose position error changed by
+    /// `error_step` over the last step ([`crate::control::law::propose`]).
+    #[inline]
+    pub fn law_input<'a, const M: usize, const W: usize>(
+        &'a self,
+        scenario: &'a Scenario<N, M, W>,
+        q: &'a [f32],
+        error_step: f32,
+    ) -> LawInput<'a, N> {
+        let settings = scenario.settings();
+        let n = scenario.robot().len().min(N);
+        LawInput {
+            robot: scenario.robot(),
+            frames: &self.frames,
+            q,
+            error: &self.error,
+            mu: &self.mu[..n],
+            clearance: self.field.clearance.map(|c| c.value),
+            law: &settings.law,
+            engage_clearance: settings.avoidance.engage_clearance,
+            step: settings.step_rule(),
+            error_step,
+        }
+    }
+
+    /// `C - 1` of the closest pair within influence (infinity: none).
+    pub fn closest(&self) -> f32 {
+        self.field.clearance.map_or(f32::INFINITY, |c| c.value)
+    }
+
+    /// Whether a step may end here, coming from a configuration whose
+    /// closest pair was at `c_from`: every point clear, and not creeping onto
+    /// a surface (below `floor` the closest clearance may not shrink).
+    pub fn safe_after(&self, c_from: f32, floor: f32) -> bool {
+        let c = self.closest();
+        self.field.clear && (c >= floor || c >= c_from)
+    }
+
+    /// Evaluates the arm of `scenario` at `q` against `target`: forward
+    /// kinematics, the error (eqs. 11-12), the potential and its gradient
+    /// (eqs. 20, 25-26).
+    pub fn evaluate<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        q: &[f32],
+        target: &Target,
+    ) {
+        let robot = scenario.robot();
+        forward_kinematics(robot, q, &mut self.frames);
+        self.error = target_error(scenario, &self.frames, q, target);
+        self.field = potential_gradient(
+            robot,
+            &self.frames,
+            scenario.obstacles(),
+            &scenario.settings().avoidance,
+            &mut self.mu,
+            &mut self.distance_sq,
+        );
+    }
+}
+
+/// The evaluation of the current configuration (`now`) and of the candidate
+/// (`next`), in two slots: accepting the candidate swaps their roles, not
+/// their contents (an evaluation is some 700 bytes for PIPS).
+#[derive(Clone, Debug)]
+pub struct Evaluations<const N: usize> {
+    slots: [Evaluation<N>; 2],
+    /// The slot of `now` (0 or 1); `next` is the other.
+    now: usize,
+}
+
+impl<const N: usize> Default for Evaluations<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Evaluations<N> {
+    /// Two empty slots.
+    pub fn new() -> Self {
+        Evaluations {
+            slots: [Evaluation::new(), Evaluation::new()],
+            now: 0,
+        }
+    }
+
+    /// Both evaluations to their initial values, in place.
+    pub fn reset(&mut self) {
+        self.slots.iter_mut().for_each(Evaluation::reset);
+        self.now = 0;
+    }
+
+    // `& 1`: the index is provably in bounds (no panic path).
+    /// The current configuration's evaluation.
+    #[inline(always)]
+    pub fn now(&self) -> &Evaluation<N> {
+        &self.slots[self.now & 1]
+    }
+
+    /// The current configuration's evaluation, writable.
+    #[inline(always)]
+    pub fn now_mut(&mut self) -> &mut Evaluation<N> {
+        &mut self.slots[self.now & 1]
+    }
+
+    /// The candidate's evaluation.
+    #[inline(always)]
+    pub fn next(&self) -> &Evaluation<N> {
+        &self.slots[(self.now & 1) ^ 1]
+    }
+
+    /// The candidate's evaluation, writable.
+    #[inline(always)]
+    pub fn next_mut(&mut self) -> &mut Evaluation<N> {
+        &mut self.slots[(self.now & 1) ^ 1]
+    }
+
+    /// `(now, next)`, both writable.
+    #[inline(always)]
+    pub fn both_mut(&mut self) -> (&mut Evaluation<N>, &mut Evaluation<N>) {
+        let [a, b] = &mut self.slots;
+        if self.now & 1 == 0 {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    }
+
+    /// The candidate becomes the current evaluation (and the old current
+    /// one the slot the next candidate is evaluated into).
+    #[inline(always)]
+    pub fn accept(&mut self) {
+        self.now ^= 1;
+    }
+}
