@@ -32,12 +32,17 @@ use crate::robot::{JointKind, Robot};
 #[derive(Clone, Debug)]
 pub struct Frames<const N: usize> {
     n: usize,
-    /// `pivot[j]`, the point joint `j` turns about (DH: `o_j`).
-    pivot: [Vec3; N],
+    /// The pivot of the first joint (DH: the base's origin `o_0`).
+    base: Vec3,
+    /// `link_end[j]`, where link `j` ends: the pivot of joint `j + 1`, and
+    /// for the last link the end effector (DH: `o_{j+1}`). Each joint's
+    /// pivot is stored once, as the end of the link before it: the
+    /// avoidance points and conservative advancement read every link from
+    /// its pivot to its end, so this layout costs no lookup more than the
+    /// DH one it replaces.
+    link_end: [Vec3; N],
     /// `axis[j]`, the unit axis joint `j` moves about or along (DH: `z_j`).
     axis: [Vec3; N],
-    /// Position of the end effector `r_n4` (DH: `o_n`).
-    end_position: Vec3,
     /// Orientation of the end-effector frame `n`: columns `r_n1, r_n2, r_n3` (eq. 6).
     end_rotation: Mat3,
 }
@@ -46,9 +51,9 @@ impl<const N: usize> Default for Frames<N> {
     fn default() -> Self {
         Frames {
             n: 0,
-            pivot: [Vec3::zeros(); N],
+            base: Vec3::zeros(),
+            link_end: [Vec3::zeros(); N],
             axis: [Vec3::z(); N],
-            end_position: Vec3::zeros(),
             end_rotation: Mat3::identity(),
         }
     }
@@ -71,19 +76,19 @@ impl<const N: usize> Frames<N> {
     /// end effector after the last joint (DH: `o_{j+1}`).
     #[inline]
     pub fn link_end(&self, j: usize) -> Vec3 {
-        if j + 1 < self.n {
-            self.pivot(j + 1)
-        } else {
-            self.end_position
-        }
+        // `get`: no panic path; every caller passes `j < len()`.
+        self.link_end.get(j).copied().unwrap_or_else(Vec3::zeros)
     }
 
     /// The point joint `j` turns about (a prismatic joint: where its link
     /// starts), length units (DH: `o_j`).
     #[inline]
     pub fn pivot(&self, j: usize) -> Vec3 {
-        // `get`: no panic path; every caller passes `j < len()`.
-        self.pivot.get(j).copied().unwrap_or_else(Vec3::zeros)
+        if j == 0 {
+            self.base
+        } else {
+            self.link_end(j - 1)
+        }
     }
 
     /// Unit axis `z_j` joint `j` turns about or slides along.
@@ -108,7 +113,14 @@ impl<const N: usize> Frames<N> {
     /// End-effector position `r_n4`.
     #[inline]
     pub fn end_position(&self) -> Vec3 {
-        self.end_position
+        match self
+            .n
+            .checked_sub(1)
+            .and_then(|last| self.link_end.get(last))
+        {
+            Some(&o) => o,
+            None => self.base,
+        }
     }
 
     /// End-effector orientation (columns `r_n1..r_n3`).
@@ -127,17 +139,17 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
     let mut rot = Mat3::identity();
     let mut o = Vec3::zeros();
     let mut n = 0;
-    for (((joint, link), &qj), (pivot, axis)) in robot
+    frames.base = o;
+    for (((joint, link), &qj), (end, axis)) in robot
         .joints()
         .iter()
         .zip(robot.links())
         .zip(q)
-        .zip(frames.pivot.iter_mut().zip(frames.axis.iter_mut()))
+        .zip(frames.link_end.iter_mut().zip(frames.axis.iter_mut()))
     {
         let x = rot.column(0).into_owned();
         let y = rot.column(1).into_owned();
         let z = rot.column(2).into_owned();
-        *pivot = o;
         *axis = z;
         let (ct, st, d) = match joint.kind {
             JointKind::Revolute => {
@@ -152,11 +164,11 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
         let yk = yt * link.cos_alpha + z * link.sin_alpha;
         let zk = z * link.cos_alpha - yt * link.sin_alpha;
         o += z * d + xk * joint.a;
+        *end = o;
         rot = Mat3::from_columns(&[xk, yk, zk]);
         n += 1;
     }
     frames.n = n;
-    frames.end_position = o;
     frames.end_rotation = rot;
 }
 

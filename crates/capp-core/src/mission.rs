@@ -226,6 +226,9 @@ impl Settings {
     /// Checks every setting's range: its own, then each stage's
     /// ([`LawSettings::validate`], [`AvoidanceSettings::validate`],
     /// [`EscapeSettings::validate`]).
+    // Not inlined: validation is cold, and one copy of it is enough (the
+    // board's serving loop would otherwise carry its own, 1.5 KiB).
+    #[inline(never)]
     pub fn validate(&self) -> Result<(), MissionError> {
         use SettingsField as F;
         let own = || {

@@ -306,6 +306,9 @@ pub fn rotation_error<const N: usize>(frames: &Frames<N>, error: &PoseError) -> 
 /// `input.step.time_step_s`, projected against the obstacles (eq. 24, its
 /// guard from `input`'s gradient and closest pair). `rate` holds
 /// `robot.len()` values.
+// Not inlined into `propose`: one copy of each law, as before the
+// interface (flash).
+#[inline(never)]
 pub fn damped_rate<const N: usize>(
     input: &LawInput<'_, N>,
     ws: &mut DampedWorkspace<N>,
@@ -356,11 +359,12 @@ pub fn damped_rate<const N: usize>(
         .enumerate()
     {
         let (linear, angular) = frames.column(j, joint.kind, &p);
-        *column = if error.has_orientation {
-            six(linear, angular)
+        let angular = if error.has_orientation {
+            angular
         } else {
-            six(linear, Vec3::zeros())
+            Vec3::zeros()
         };
+        *column = six(linear, angular);
         // G_j = J_j . Lambda eps (eq. 13), whose sign is eq. 18's eta.
         *g = dot6(column, &weighted);
         *m = joint.max_rate * joint_weight(joint, qj, *g);

@@ -62,6 +62,9 @@ impl<const N: usize> FirstOrderWorkspace<N> {
 /// 24, its strength from `input`'s closest pair), the rate limits, and the
 /// listing's step with its descent and stiffness bounds. `rate` holds
 /// `robot.len()` values.
+// Not inlined into `propose`: one copy of each law, as before the
+// interface (flash).
+#[inline(never)]
 pub fn first_order_rate<const N: usize>(
     input: &LawInput<'_, N>,
     ws: &mut FirstOrderWorkspace<N>,
