@@ -9,9 +9,10 @@
 //!
 //! | module | owns |
 //! |---|---|
-//! | [`problem`] | the loaded problem (core types + start + settings) and its validation, with file/line errors |
-//! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
-//! | [`legacy`] | CAPP.c's `input.dat` reader and `joints.dat` writer |
+//! | [`problem`] | the loaded problem (core types + start + settings) and its validation, with file/line errors; a leaf the readers build on |
+//! | [`input`] | reading a problem from a file: [`Problem::load`] picks the reader by file kind |
+//! | [`input::scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
+//! | [`input::legacy`] | CAPP.c's `input.dat` reader and `joints.dat` writer |
 //! | [`plan`] | running the planner and recording every step |
 //! | [`escapes`] | where a run escaped dead ends (walks, detours, the return), and the CSV's `escape` column |
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
@@ -28,12 +29,11 @@
 pub mod check;
 pub mod cli;
 pub mod escapes;
-pub mod legacy;
+pub mod input;
 pub mod output;
 pub mod plan;
 pub mod problem;
 pub mod render;
-pub mod scenario_file;
 pub mod serial;
 pub mod trajectory;
 

@@ -4,7 +4,7 @@
 //! |---|---|
 //! | `trajectory.csv` | every step: see [`TRAJECTORY_COLUMNS`] and the joint columns `q1..qn` |
 //! | `setpoints.csv` | the decimated setpoint stream, same columns |
-//! | `joints.dat` | the setpoints in the listing's layout ([`crate::legacy::joints_dat_record`]) |
+//! | `joints.dat` | the setpoints in the listing's layout ([`crate::input::legacy::joints_dat_record`]) |
 //! | `summary.txt` | the summary printed on stdout |
 //! | `scenario.toml` / `input.dat` | a copy of the input, so `capp check` finds it |
 //! | `COMPLETE` | written last |
@@ -120,7 +120,7 @@ pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result
 pub fn joints_dat<'a>(rows: impl IntoIterator<Item = &'a Row>) -> String {
     let mut out = String::new();
     for r in rows {
-        crate::legacy::joints_dat_record(&r.q, &mut out);
+        crate::input::legacy::joints_dat_record(&r.q, &mut out);
     }
     out
 }
