@@ -17,7 +17,8 @@
 //! | [`escapes`] | where a run escaped dead ends (walks, detours, the return), and the CSV's `escape` column |
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
 //! | [`trajectory`] | reading a trajectory CSV back |
-//! | [`check`] | the independent f64 checker (own kinematics, own super-ellipsoids) |
+//! | [`geometry`] | the independent f64 model of the robot and obstacles (own kinematics, own super-ellipsoids), used by [`check`], [`render`] and the suite |
+//! | [`check`] | the independent trajectory checker, on [`geometry`] |
 //! | [`render`] | SVG/PNG pictures with text, the 3-D `viewer.html`, `motion.gif`, report charts |
 //! | [`serial`] | `capp serial`: upload to a board, receive its stream, account for every setpoint |
 //! | [`cli`] | the `capp` command line |
@@ -29,6 +30,7 @@
 pub mod check;
 pub mod cli;
 pub mod escapes;
+pub mod geometry;
 pub mod input;
 pub mod output;
 pub mod plan;
