@@ -16,6 +16,7 @@
 //! | [`plan`] | running the planner and recording every step |
 //! | [`escapes`] | where a run escaped dead ends (walks, detours, the return), and the CSV's `escape` column |
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
+//! | [`output::summary`] | the run summary text (stdout and `summary.txt`) |
 //! | [`trajectory`] | reading a trajectory CSV back |
 //! | [`geometry`] | the independent f64 model of the robot and obstacles (own kinematics, own super-ellipsoids), used by [`check`], [`render`] and the suite |
 //! | [`check`] | the independent trajectory checker, on [`geometry`] |
