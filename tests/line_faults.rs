@@ -134,7 +134,7 @@ fn faults_on_the_line_are_reported_never_accepted_and_the_stream_recovers() {
     );
     // No damaged setpoint is accepted: every kept row is the host's, bit for bit.
     let out = dir.path().join("faulty");
-    let mut summary = capp_sim::output::Summary::new(&problem, &result);
+    let mut summary = capp_sim::output::summary::Summary::new(&problem, &result);
     summary.link = Some(report.clone());
     capp_sim::output::write_run(&out, &problem, &result, &summary, |_| Ok(())).unwrap();
     let board_rows = rows_by_step(&out.join("setpoints.csv"));

@@ -12,7 +12,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    let Ok(problem) = capp_sim::legacy::parse(text, Path::new("input.dat")) else {
+    let Ok(problem) = capp_sim::input::legacy::parse(text, Path::new("input.dat")) else {
         return;
     };
     if let Ok(scenario) = problem.validate() {

@@ -12,7 +12,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    let Ok(problem) = capp_sim::scenario_file::parse(text, Path::new("fuzz.toml")) else {
+    let Ok(problem) = capp_sim::input::scenario_file::parse(text, Path::new("fuzz.toml")) else {
         return;
     };
     if let Ok(scenario) = problem.validate() {

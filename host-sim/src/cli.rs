@@ -16,7 +16,7 @@ use capp_core::Outcome;
 use std::ffi::OsString;
 use std::time::Duration;
 
-use crate::output::{self, Summary};
+use crate::output::{self, summary::Summary};
 use crate::serial::{self, Connection};
 use crate::{check, plan, render, trajectory, Problem};
 use clap::{Args, Parser, Subcommand};

@@ -9,14 +9,17 @@
 //!
 //! | module | owns |
 //! |---|---|
-//! | [`problem`] | the loaded problem (core types + start + settings) and its validation, with file/line errors |
-//! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
-//! | [`legacy`] | CAPP.c's `input.dat` reader and `joints.dat` writer |
+//! | [`problem`] | the loaded problem (core types + start + settings) and its validation, with file/line errors; a leaf the readers build on |
+//! | [`input`] | reading a problem from a file: [`Problem::load`] picks the reader by file kind |
+//! | [`input::scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
+//! | [`input::legacy`] | CAPP.c's `input.dat` reader and `joints.dat` writer |
 //! | [`plan`] | running the planner and recording every step |
 //! | [`escapes`] | where a run escaped dead ends (walks, detours, the return), and the CSV's `escape` column |
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
+//! | [`output::summary`] | the run summary text (stdout and `summary.txt`) |
 //! | [`trajectory`] | reading a trajectory CSV back |
-//! | [`check`] | the independent f64 checker (own kinematics, own super-ellipsoids) |
+//! | [`geometry`] | the independent f64 model of the robot and obstacles (own kinematics, own super-ellipsoids), used by [`check`], [`render`] and the suite |
+//! | [`check`] | the independent trajectory checker, on [`geometry`] |
 //! | [`render`] | SVG/PNG pictures with text, the 3-D `viewer.html`, `motion.gif`, report charts |
 //! | [`serial`] | `capp serial`: upload to a board, receive its stream, account for every setpoint |
 //! | [`cli`] | the `capp` command line |
@@ -28,12 +31,12 @@
 pub mod check;
 pub mod cli;
 pub mod escapes;
-pub mod legacy;
+pub mod geometry;
+pub mod input;
 pub mod output;
 pub mod plan;
 pub mod problem;
 pub mod render;
-pub mod scenario_file;
 pub mod serial;
 pub mod trajectory;
 

@@ -2,9 +2,12 @@
 //! obstacles, waypoints, settings) plus the start configuration and where each
 //! item came from in its file, so that every rejection names the file and line.
 //!
-//! Both readers ([`crate::scenario_file`], [`crate::legacy`]) produce a
-//! [`Problem`]; [`Problem::validate`] then runs the core's own checks (robot,
-//! obstacles, mission, start) and turns their errors into [`LoadError`]s.
+//! This module is a leaf: it names the types the readers produce and knows
+//! nothing of file formats. Both readers ([`crate::input::scenario_file`],
+//! [`crate::input::legacy`]) produce a [`Problem`], and [`crate::input`]
+//! chooses between them ([`Problem::load`]); [`Problem::validate`] then runs
+//! the core's own checks (robot, obstacles, mission, start) and turns their
+//! errors into [`LoadError`]s.
 //! Capacities: [`MAX_JOINTS`] joints, [`MAX_OBSTACLES`] obstacles,
 //! [`MAX_WAYPOINTS`] waypoints (the target included).
 
@@ -127,20 +130,6 @@ pub struct Problem {
 }
 
 impl Problem {
-    /// Reads `path`: a `.toml` file as a scenario, anything else as `input.dat`,
-    /// and validates the result ([`Problem::validate`]).
-    pub fn load(path: &Path) -> Result<Problem, LoadError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| LoadError::new(path, None, format!("cannot read the file: {e}")))?;
-        let problem = if is_toml(path) {
-            crate::scenario_file::parse(&text, path)?
-        } else {
-            crate::legacy::parse(&text, path)?
-        };
-        problem.validate()?;
-        Ok(problem)
-    }
-
     fn error(&self, line: Option<usize>, message: impl Into<String>) -> LoadError {
         LoadError::new(&self.source, line, message)
     }
@@ -321,10 +310,4 @@ fn obstacle_error_index(e: &capp_core::ObstacleError) -> Option<usize> {
         | E::ExponentOutOfRange { obstacle } => Some(obstacle as usize),
         E::TooMany { .. } => None,
     }
-}
-
-/// Whether `path` is read as a TOML scenario (by its extension).
-pub fn is_toml(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
 }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use capp_sim::escapes::{self, Kind};
-use capp_sim::output::Summary;
+use capp_sim::output::summary::Summary;
 use capp_sim::render::plots::band_color;
 use capp_sim::render::views::{DETOUR, RETURN, WALK};
 use capp_sim::{plan, Problem};

@@ -10,7 +10,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use capp_sim::{scenario_file, LoadError, Problem};
+use capp_sim::input::scenario_file;
+use capp_sim::{LoadError, Problem};
 
 /// Length unit of a case file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -19,8 +19,9 @@
 
 use capp_core::escape::Side;
 use capp_core::Outcome;
-use capp_sim::check::{self, Geometry, ViolationKind};
+use capp_sim::check::{self, ViolationKind};
 use capp_sim::escapes::{self, Kind};
+use capp_sim::geometry::Geometry;
 use capp_sim::plan::RunResult;
 use capp_sim::trajectory::Trajectory;
 use capp_sim::Problem;

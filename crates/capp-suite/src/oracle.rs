@@ -1,6 +1,7 @@
 //! The oracle: RRT-Connect (Kuffner & LaValle 2000) in joint space, from the
 //! start to the goal configuration, collision-checked by the independent
-//! `f64` checker ([`capp_sim::check::Geometry`]), nothing of the planner's.
+//! `f64` model of robot and obstacles ([`capp_sim::geometry::Geometry`]),
+//! nothing of the planner's.
 //!
 //! * Metric: joint differences divided by the joint's rate limit, so lengths
 //!   are seconds at the rate limits and the result does not depend on units;
@@ -20,7 +21,7 @@
 
 use std::time::Instant;
 
-use capp_sim::check::Geometry;
+use capp_sim::geometry::Geometry;
 use capp_sim::Problem;
 
 use crate::metrics::{rate_time, rates, DENSE_STEP};

@@ -2,7 +2,7 @@
 //! on a few threads, results in case order whatever the scheduling.
 //!
 //! A planner run is exactly `capp run`'s: the variant's settings are put into
-//! the case file's text, the text is read by `capp_sim::scenario_file::parse`
+//! the case file's text, the text is read by `capp_sim::input::scenario_file::parse`
 //! and validated, and `capp_sim::plan::run` drives `Planner<32>`.
 
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -6,7 +6,7 @@
 //! the debug build stays fast. No test measures time.
 
 use capp_core::Outcome;
-use capp_sim::check::Geometry;
+use capp_sim::geometry::Geometry;
 use capp_suite::case::{self, Case};
 use capp_suite::families::scene::{end_pose, within_limits, CLEAR_MARGIN};
 use capp_suite::families::{self, Family};

@@ -10,6 +10,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use ab_glyph::{point, Font};
 use anyhow::Result;
 
 use super::font;
@@ -425,7 +426,34 @@ impl Pixmap {
                 text,
                 anchor,
                 color,
-            } => font::draw(self, *at, *size, text, *anchor, *color),
+            } => self.draw_text(*at, *size, text, *anchor, *color),
+        }
+    }
+
+    /// Paints `text` with its baseline anchor at `at`, in the shipped font
+    /// ([`font`]: its layout, `ab_glyph`'s coverage rasterisation).
+    pub fn draw_text(&mut self, at: P2, size: f64, text: &str, anchor: Anchor, color: Rgb) {
+        let Some(font) = font::font() else {
+            return;
+        };
+        let (glyphs, advance) = font::layout(font, size, text);
+        let x0 = at.0 as f32
+            - match anchor {
+                Anchor::Start => 0.0,
+                Anchor::Middle => advance / 2.0,
+                Anchor::End => advance,
+            };
+        let full = (0.0, 0.0, self.width as f64, self.height as f64);
+        let s = font::scale(font, size);
+        for (id, caret) in glyphs {
+            let glyph = id.with_scale_and_position(s, point(x0 + caret, at.1 as f32));
+            if let Some(outline) = font.outline_glyph(glyph) {
+                let b = outline.px_bounds();
+                let (bx, by) = (b.min.x as i64, b.min.y as i64);
+                outline.draw(|x, y, c| {
+                    self.blend(bx + x as i64, by + y as i64, color, c as f64, full);
+                });
+            }
         }
     }
 
@@ -613,5 +641,16 @@ mod tests {
         let dark = p.rgb.chunks(3).filter(|c| c[0] == 0).count();
         assert_eq!(dark, 16);
         assert_eq!(p.rgb.chunks(3).filter(|c| c[0] == 255).count(), 84);
+    }
+
+    #[test]
+    fn text_is_painted_and_measured() {
+        let mut px = Pixmap::new(120, 30);
+        px.draw_text((60.0, 20.0), 14.0, "V, in²", Anchor::Middle, [0, 0, 0]);
+        let inked = px.rgb.chunks(3).filter(|c| c[0] < 128).count();
+        assert!(inked > 30, "{inked}");
+        let w = font::width("V, in²", 14.0);
+        assert!(w > 30.0 && w < 60.0, "{w}");
+        assert!(font::width("WWW", 12.0) > font::width("iii", 12.0));
     }
 }

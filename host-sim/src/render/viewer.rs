@@ -21,8 +21,8 @@ use std::fmt::Write as _;
 use super::canvas::escape;
 use super::chart::nice_step;
 use super::views::{bounds, escape_color, frames, origins, surface};
-use crate::check::forward;
 use crate::escapes::{classify, side_name, Kind};
+use crate::geometry::forward;
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 

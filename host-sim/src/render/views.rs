@@ -8,8 +8,8 @@
 use super::canvas::{Anchor, Canvas, Clip, Rgb, Shape, P2};
 use super::chart::{diamond, legend_marker, nice_step, tick_label, Marker};
 use super::font;
-use crate::check::forward;
 use crate::escapes::{Kind, Stretch};
+use crate::geometry::forward;
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 

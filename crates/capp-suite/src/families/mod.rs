@@ -11,7 +11,7 @@
 //! Every case is built the same way ([`scene`]): a scene, a start (home or a
 //! random configuration), a goal configuration, both within limits and clear
 //! of every inflated obstacle by `C - 1 >= CLEAR_MARGIN` by the independent
-//! checker ([`capp_sim::check::Geometry`]); then obstacles placed in the way
+//! `f64` model ([`capp_sim::geometry::Geometry`]); then obstacles placed in the way
 //! (at arm points of the joint-space midpoint of start and goal, and on the
 //! straight end-effector path), each kept only if start and goal stay clear;
 //! finally the file is read back by the loader and the start must be accepted

@@ -3,7 +3,7 @@
 //! placed in the way, and the finished, re-read and validated case file.
 
 use capp_core::SuperEllipsoid;
-use capp_sim::check::{forward, Geometry};
+use capp_sim::geometry::{forward, Geometry};
 use capp_sim::Problem;
 
 use crate::case::{self, round, Case, Obstacle, Spec};

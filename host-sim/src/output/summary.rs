@@ -1,59 +1,16 @@
-//! The output folder of a run, written so that a folder that exists is complete.
-//!
-//! | file | contents |
-//! |---|---|
-//! | `trajectory.csv` | every step: see [`TRAJECTORY_COLUMNS`] and the joint columns `q1..qn` |
-//! | `setpoints.csv` | the decimated setpoint stream, same columns |
-//! | `joints.dat` | the setpoints in the listing's layout ([`crate::legacy::joints_dat_record`]) |
-//! | `summary.txt` | the summary printed on stdout |
-//! | `scenario.toml` / `input.dat` | a copy of the input, so `capp check` finds it |
-//! | `COMPLETE` | written last |
-//!
-//! Everything is written into a sibling staging folder, which is renamed onto
-//! the requested path at the end; a failed run leaves at most a
-//! `.NAME.partial-PID` folder, never a folder that looks complete.
+//! The run summary: the numbers a person wants after a run, printed on stdout
+//! by `capp run` / `capp serial` and written as `summary.txt` into the output
+//! folder ([`super::write_run`]): outcome, steps, final errors, the smallest
+//! clearance, joint range use, the dead-end escapes told in words, setpoints,
+//! wall time and, for a plan received from a board, what happened on the line.
 
-use std::fmt::{self, Write as _};
-use std::fs;
-use std::path::{Path, PathBuf};
+use std::fmt;
 
-use anyhow::{bail, Context, Result};
-use capp_core::escape::EscapeState;
 use capp_core::Outcome;
 
 use crate::escapes::{self, Kind, Stretch};
-use crate::plan::{Row, RunResult};
-use crate::problem::{Problem, SourceKind};
-
-/// Columns before the joint values.
-pub const LEAD_COLUMNS: [&str; 2] = ["step", "h_s"];
-/// Columns after the joint values.
-pub const TRAJECTORY_COLUMNS: [&str; 22] = [
-    "x",
-    "y",
-    "z",
-    "r11",
-    "r12",
-    "r13",
-    "r21",
-    "r22",
-    "r23",
-    "r31",
-    "r32",
-    "r33",
-    "v",
-    "position_error",
-    "orientation_error",
-    "clearance",
-    "clearance_point",
-    "clearance_obstacle",
-    "waypoint",
-    "constrained",
-    "halvings",
-    "escape",
-];
-/// The marker written last into a finished output folder.
-pub const COMPLETE_MARKER: &str = "COMPLETE";
+use crate::plan::RunResult;
+use crate::problem::Problem;
 
 /// Lower-case name of an outcome.
 pub fn outcome_name(outcome: Outcome) -> &'static str {
@@ -62,67 +19,6 @@ pub fn outcome_name(outcome: Outcome) -> &'static str {
         Outcome::Stalled => "stalled",
         Outcome::Capped => "capped",
     }
-}
-
-/// What the `escape` column says ([`crate::escapes::label`]): empty while
-/// the law drives, else `walk K`, `detour K obstacle O +z` (1-based attempt
-/// and obstacle, the side of the obstacle in its own frame) or `return`.
-pub fn escape_label(state: EscapeState) -> String {
-    crate::escapes::label(state)
-}
-
-/// The CSV header for `n` joints.
-pub fn header(n: usize) -> Vec<String> {
-    LEAD_COLUMNS
-        .iter()
-        .map(|s| s.to_string())
-        .chain((1..=n).map(|i| format!("q{i}")))
-        .chain(TRAJECTORY_COLUMNS.iter().map(|s| s.to_string()))
-        .collect()
-}
-
-/// Rows as CSV text (full `f32` precision: values read back bit for bit).
-/// Clearance point and obstacle are 1-based; empty when nothing is within
-/// influence. `constrained` and `halvings` are empty where not known (a plan
-/// received from a board).
-pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result<String> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(header(n))?;
-    for r in rows {
-        let mut rec: Vec<String> = vec![r.step.to_string(), r.h.to_string()];
-        rec.extend(r.q.iter().map(|v| v.to_string()));
-        rec.extend(r.position.iter().map(|v| v.to_string()));
-        rec.extend(r.rotation.iter().flatten().map(|v| v.to_string()));
-        rec.push(r.v.to_string());
-        rec.push(r.position_error.to_string());
-        rec.push(r.orientation_error.to_string());
-        match r.clearance {
-            Some(c) => {
-                rec.push(c.value.to_string());
-                rec.push((c.point as u32 + 1).to_string());
-                rec.push((c.obstacle as u32 + 1).to_string());
-            }
-            None => rec.extend([String::new(), String::new(), String::new()]),
-        }
-        rec.push((r.waypoint as u32 + 1).to_string());
-        rec.push(
-            r.constrained
-                .map_or(String::new(), |c| u8::from(c).to_string()),
-        );
-        rec.push(r.halvings.map_or(String::new(), |h| h.to_string()));
-        rec.push(r.escape.map_or(String::new(), escape_label));
-        w.write_record(&rec)?;
-    }
-    Ok(String::from_utf8(w.into_inner()?)?)
-}
-
-/// The setpoints in the listing's `joints.dat` layout.
-pub fn joints_dat<'a>(rows: impl IntoIterator<Item = &'a Row>) -> String {
-    let mut out = String::new();
-    for r in rows {
-        crate::legacy::joints_dat_record(&r.q, &mut out);
-    }
-    out
 }
 
 /// The numbers a person wants after a run.
@@ -542,85 +438,4 @@ impl fmt::Display for Summary {
         }
         Ok(())
     }
-}
-
-/// The name of the scenario copy inside an output folder.
-pub fn scenario_copy_name(problem: &Problem) -> &'static str {
-    match problem.kind {
-        SourceKind::Toml => "scenario.toml",
-        SourceKind::Legacy => "input.dat",
-    }
-}
-
-/// Finds the scenario copy in an output folder.
-pub fn find_scenario_copy(dir: &Path) -> Option<PathBuf> {
-    ["scenario.toml", "input.dat"]
-        .iter()
-        .map(|n| dir.join(n))
-        .find(|p| p.is_file())
-}
-
-/// Writes a run into `dir`, atomically; `extra` may add files (pictures) to the
-/// staging folder before it is renamed.
-pub fn write_run(
-    dir: &Path,
-    problem: &Problem,
-    result: &RunResult,
-    summary: &Summary,
-    extra: impl FnOnce(&Path) -> Result<()>,
-) -> Result<()> {
-    let parent = match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    fs::create_dir_all(&parent).with_context(|| format!("cannot create {}", parent.display()))?;
-    let leaf = dir
-        .file_name()
-        .with_context(|| format!("{} is not a folder name", dir.display()))?
-        .to_string_lossy()
-        .into_owned();
-    if dir.exists() {
-        let ours = dir.join(COMPLETE_MARKER).is_file()
-            || fs::read_dir(dir)
-                .map(|mut d| d.next().is_none())
-                .unwrap_or(false);
-        if !ours {
-            bail!(
-                "{} exists and is not a finished capp output folder; not overwriting it",
-                dir.display()
-            );
-        }
-    }
-    let staging = parent.join(format!(".{leaf}.partial-{}", std::process::id()));
-    if staging.exists() {
-        fs::remove_dir_all(&staging)?;
-    }
-    fs::create_dir(&staging).with_context(|| format!("cannot create {}", staging.display()))?;
-    let written = (|| -> Result<()> {
-        let n = problem.joints.len();
-        fs::write(staging.join("trajectory.csv"), rows_csv(n, &result.rows)?)?;
-        fs::write(
-            staging.join("setpoints.csv"),
-            rows_csv(n, result.setpoints())?,
-        )?;
-        fs::write(staging.join("joints.dat"), joints_dat(result.setpoints()))?;
-        fs::write(staging.join("summary.txt"), summary.to_string())?;
-        fs::copy(&problem.source, staging.join(scenario_copy_name(problem)))
-            .with_context(|| format!("cannot copy {}", problem.source.display()))?;
-        extra(&staging)?;
-        let mut marker = String::new();
-        let _ = writeln!(marker, "{}", outcome_name(result.outcome));
-        fs::write(staging.join(COMPLETE_MARKER), marker)?;
-        Ok(())
-    })();
-    if let Err(e) = written {
-        let _ = fs::remove_dir_all(&staging);
-        return Err(e);
-    }
-    if dir.exists() {
-        fs::remove_dir_all(dir).with_context(|| format!("cannot replace {}", dir.display()))?;
-    }
-    fs::rename(&staging, dir)
-        .with_context(|| format!("cannot move {} to {}", staging.display(), dir.display()))?;
-    Ok(())
 }
