@@ -10,99 +10,6 @@ use capp_core::planner::StartError;
 use capp_core::*;
 use common::*;
 
-/// Room for PIPS (18 joints), 8 obstacles and 4 waypoints; smaller robots fit too.
-type Pips = Scenario<18, 8, 4>;
-
-fn scenario(
-    joints: &[Joint],
-    obstacles: &[SuperEllipsoid],
-    waypoints: &[Waypoint],
-    settings: Settings,
-) -> Pips {
-    let robot = Robot::new(joints).unwrap();
-    Scenario::new(
-        robot,
-        obstacles,
-        &Mission::new(waypoints, settings).unwrap(),
-    )
-    .unwrap()
-}
-
-/// Everything a run did, with the invariants checked at every step.
-struct Run {
-    outcome: Outcome,
-    steps: u32,
-    v: Vec<f32>,
-    /// Per step: joint rates and position error.
-    rates: Vec<(Vec<f32>, f32)>,
-}
-
-/// Runs to the end, checking after every step: limits, rate limits, finite
-/// values, and (independently, in f64) every avoidance point outside every
-/// inflated obstacle.
-fn run_checked(sc: &Pips, start: &[f32]) -> Run {
-    let joints = sc.robot().joints().to_vec();
-    let s = sc.settings();
-    let margins = (
-        s.avoidance.joint_margin as f64,
-        s.avoidance.link_margin as f64,
-    );
-    let interior = s.avoidance.points_per_link as usize;
-    let obstacles: Vec<SuperEllipsoid> = sc.obstacles().iter().map(|o| *o.source()).collect();
-    let mut planner = Planner::new(sc, start).unwrap();
-    let mut previous = planner.joints().to_vec();
-    let mut run = Run {
-        outcome: Outcome::Capped,
-        steps: 0,
-        v: vec![planner.last_report().v],
-        rates: vec![],
-    };
-    let outcome = planner
-        .run(sc, |p, r| {
-            let q = p.joints();
-            for (j, joint) in joints.iter().enumerate() {
-                assert!(q[j].is_finite(), "step {}: joint {j} not finite", r.step);
-                assert!(
-                    q[j] >= joint.min && q[j] <= joint.max,
-                    "step {}: joint {j} = {} outside [{}, {}]",
-                    r.step,
-                    q[j],
-                    joint.min,
-                    joint.max
-                );
-                let moved = (q[j] - previous[j]).abs();
-                // f32: the new value is rounded to its own precision, which
-                // for a prismatic joint tens of units out is a few 1e-6.
-                let rounding = 2.0 * f32::EPSILON * q[j].abs().max(previous[j].abs());
-                let allowed = r.time_step_s * joint.max_rate * (1.0 + 1e-5) + 1e-6 + rounding;
-                assert!(
-                    moved <= allowed,
-                    "step {}: joint {j} moved {moved} > {allowed}",
-                    r.step
-                );
-            }
-            assert!(
-                r.v.is_finite() && r.position_error.is_finite() && r.orientation_error.is_finite()
-            );
-            if !obstacles.is_empty() {
-                let q64: Vec<f64> = q.iter().map(|&x| x as f64).collect();
-                let c = min_clearance64(&joints, &q64, &obstacles, margins, interior);
-                assert!(
-                    c > 0.0,
-                    "step {}: an avoidance point is inside an inflated obstacle (C - 1 = {c})",
-                    r.step
-                );
-            }
-            previous.copy_from_slice(q);
-            run.v.push(r.v);
-            run.rates.push((p.rates().to_vec(), r.position_error));
-        })
-        .unwrap();
-    run.outcome = outcome;
-    run.steps = planner.last_report().step;
-    run
-}
-
 fn pips_target(rng: &mut Rng) -> ([f32; 3], [[f32; 3]; 3]) {
     let joints = pips::joints();
     let q: Vec<f32> = joints
@@ -228,7 +135,7 @@ fn obstacles_across_the_straight_path_are_avoided_and_targets_reached() {
 /// across that straight path. (At 3 in deep the damped law, since its
 /// projection may take the joint metric, slides the hand round the box's
 /// near edge: no dead end to test.)
-fn planar_box_scenario(waypoints: &[Waypoint], escape_attempts: u8) -> (Pips, [f32; 3]) {
+fn planar_box_scenario(waypoints: &[Waypoint], escape_attempts: u8) -> (Sc, [f32; 3]) {
     let link = Joint::revolute(0.0, 10.0, 0.0, -2.8, 2.8, 0.5);
     let joints = [link; 3];
     let mut settings = Settings::default();
@@ -365,7 +272,7 @@ fn bad_inputs_are_errors_not_panics() {
 
     // Obstacles: zero semi-axis, NaN, infinite exponent.
     let zero = SuperEllipsoid::aligned([0.0; 3], [1.0, 0.0, 1.0], 2.0);
-    let err = Pips::new(
+    let err = Sc::new(
         robot(),
         &[zero],
         &mission(good_waypoint, Settings::default()),
@@ -376,14 +283,14 @@ fn bad_inputs_are_errors_not_panics() {
         ScenarioError::Obstacle(ObstacleError::SemiAxisOutOfRange { obstacle: 0 })
     );
     let nan = SuperEllipsoid::aligned([f32::NAN, 0.0, 0.0], [1.0; 3], 2.0);
-    assert!(Pips::new(
+    assert!(Sc::new(
         robot(),
         &[nan],
         &mission(good_waypoint, Settings::default())
     )
     .is_err());
     let inf = SuperEllipsoid::aligned([0.0; 3], [1.0; 3], f32::INFINITY);
-    assert!(Pips::new(
+    assert!(Sc::new(
         robot(),
         &[inf],
         &mission(good_waypoint, Settings::default())
@@ -391,7 +298,7 @@ fn bad_inputs_are_errors_not_panics() {
     .is_err());
 
     // Waypoints: NaN position, a reflection instead of a rotation.
-    let err = Pips::new(
+    let err = Sc::new(
         robot(),
         &[],
         &mission(Waypoint::at([f32::NAN, 0.0, 0.0]), Settings::default()),
@@ -406,10 +313,10 @@ fn bad_inputs_are_errors_not_panics() {
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
     );
     assert!(matches!(
-        Pips::new(robot(), &[], &mission(mirror, Settings::default())),
+        Sc::new(robot(), &[], &mission(mirror, Settings::default())),
         Err(ScenarioError::Mission(MissionError::NotARotation { .. }))
     ));
-    let err = Pips::new(
+    let err = Sc::new(
         robot(),
         &[],
         &Mission {
@@ -440,13 +347,13 @@ fn bad_inputs_are_errors_not_panics() {
         },
     ] {
         assert!(matches!(
-            Pips::new(robot(), &[], &mission(good_waypoint, broken)),
+            Sc::new(robot(), &[], &mission(good_waypoint, broken)),
             Err(ScenarioError::Mission(MissionError::BadSetting(_)))
         ));
     }
 
     // Start configurations.
-    let sc = Pips::new(robot(), &[], &mission(good_waypoint, Settings::default())).unwrap();
+    let sc = Sc::new(robot(), &[], &mission(good_waypoint, Settings::default())).unwrap();
     let mut q = pips::home();
     q[3] = f32::INFINITY;
     assert_eq!(
@@ -468,7 +375,7 @@ fn bad_inputs_are_errors_not_panics() {
     ));
     let (p, _) = pose_of(&joints, &pips::home());
     let around_hand = SuperEllipsoid::aligned(p, [2.0; 3], 2.0);
-    let sc = Pips::new(
+    let sc = Sc::new(
         robot(),
         &[around_hand],
         &mission(good_waypoint, Settings::default()),
