@@ -183,7 +183,7 @@ fn trap_is_a_dead_end_by_construction() {
     }
     // Free space reaches the target: the mirrored configuration is there.
     let mirrored = TRAP_START.map(|q| -q);
-    assert!(planar_miss(&planar(), &mirrored, target) < 1e-4);
+    assert!(miss(&planar(), &mirrored, target) < 1e-4);
 }
 
 #[test]
@@ -208,7 +208,7 @@ fn a_planar_arm_stalls_in_a_trap_and_leaves_it_with_waypoints_or_an_escape() {
     let sc = planar_scenario(&[trap_wall()], &round, 0);
     let run = run_checked(&sc, &TRAP_START);
     assert_eq!(run.outcome, Outcome::Reached);
-    assert!(planar_miss(&planar(), &run.joints, trap_target()) <= tolerance + 1e-4);
+    assert!(miss(&planar(), &run.joints, trap_target()) <= tolerance + 1e-4);
     // The planner's own: escapes on, it leaves the trap and goes round,
     // never touching the wall (`run_checked`).
     let sc = planar_scenario(
@@ -219,7 +219,7 @@ fn a_planar_arm_stalls_in_a_trap_and_leaves_it_with_waypoints_or_an_escape() {
     let run = run_checked(&sc, &TRAP_START);
     assert_eq!(run.outcome, Outcome::Reached);
     assert!(run.escape_steps > 0, "it escaped");
-    assert!(planar_miss(&planar(), &run.joints, trap_target()) <= tolerance + 1e-4);
+    assert!(miss(&planar(), &run.joints, trap_target()) <= tolerance + 1e-4);
 }
 
 /// A wall across the planar arm's whole reach: the band 18.5 <= x <= 21.5,

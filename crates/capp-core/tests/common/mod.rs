@@ -387,8 +387,11 @@ pub fn run_checked(sc: &Sc, start: &[f32]) -> Run {
     }
 }
 
-/// Planar distance from the hand of `q` to `target` (x, y).
-pub fn planar_miss(joints: &[Joint], q: &[f32], target: [f32; 3]) -> f32 {
+/// Distance from the hand of `q` (f64 forward kinematics) to `target`.
+pub fn miss(joints: &[Joint], q: &[f32], target: [f32; 3]) -> f32 {
     let (p, _) = pose_of(joints, q);
-    (p[0] - target[0]).hypot(p[1] - target[1])
+    (0..3)
+        .map(|i| (p[i] - target[i]).powi(2))
+        .sum::<f32>()
+        .sqrt()
 }
