@@ -234,8 +234,8 @@ fn closed_wall() -> SuperEllipsoid {
 
 #[test]
 fn a_planar_arm_behind_a_wall_across_its_reach_stalls_escapes_or_not() {
-    let target = [25.0, 5.0, 0.0];
-    assert!((target[0] as f32).hypot(target[1]) < PLANAR_REACH);
+    let target: [f32; 3] = [25.0, 5.0, 0.0];
+    assert!(target[0].hypot(target[1]) < PLANAR_REACH);
     for y in [-30.0, 0.0, 30.0] {
         assert!(c64(&closed_wall(), 0.0, [20.0, y, 0.0]) <= 1.0);
     }
