@@ -3,6 +3,8 @@
 //! command line as a user runs it (`capp run --render`, so the pictures are
 //! drawn from `trajectory.csv` read back).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use capp_sim::escapes::{self, Kind};
@@ -10,21 +12,6 @@ use capp_sim::output::summary::Summary;
 use capp_sim::render::plots::band_color;
 use capp_sim::render::views::{DETOUR, RETURN, WALK};
 use capp_sim::{plan, Problem};
-
-/// The planar arm of `capp-core`'s `planar_box_scenario` (links of 10 in)
-/// with a box of half-height `half_height` in its way: a tall one (too big
-/// to go round) is escaped by a walk, a short post by a detour.
-fn scenario(name: &str, half_height: f64) -> String {
-    let joint = "[[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n";
-    format!(
-        "name = \"{name}\"\nstart = [0.0, 0.5, 0.5]\n\
-         [units]\nangle = \"radians\"\nlength = \"inches\"\n\
-         {joint}{joint}{joint}\
-         [target]\nposition = [24.2, -13.2, 0.0]\n\
-         [[obstacles]]\nname = \"post\"\ncentre = [25.0, -0.5, 0.0]\nsemi_axes = [1.5, 1.5, {half_height}]\nexponent = 8.0\n\
-         [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n"
-    )
-}
 
 /// `capp run FILE --out DIR --render -q`; returns the output folder.
 fn run(dir: &Path, name: &str, text: &str) -> PathBuf {
@@ -83,7 +70,10 @@ fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
     ] {
         // Walks and detours alone (a search would come first: its own test
         // is in tests/scenarios.rs).
-        let text = format!("{}escape_searches = 0\n", scenario(name, half_height));
+        let text = format!(
+            "{}escape_searches = 0\n",
+            common::planar_trap(name, half_height)
+        );
         let out = run(dir.path(), name, &text);
         let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
         eprintln!("{summary}");

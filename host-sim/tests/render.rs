@@ -20,8 +20,12 @@ fn payload_bay() -> (Problem, Trajectory) {
 
 /// Width, height and RGB pixels of a PNG file.
 fn decode_png(path: &Path) -> (u32, u32, Vec<u8>) {
-    let file = std::fs::File::open(path).unwrap();
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+    decode_png_bytes(&std::fs::read(path).unwrap())
+}
+
+/// Width, height and RGB pixels of PNG bytes.
+fn decode_png_bytes(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
         .read_info()
         .unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
@@ -185,7 +189,48 @@ fn pngs_have_text() {
             .filter(|(a, b)| a != b)
             .count();
         assert!(changed > 3000, "{name}: text changed {changed} pixels");
-        // The same bytes every time: no system font, no clock.
-        assert_eq!(canvas.png().unwrap(), canvas.png().unwrap());
+        // The PNG carries those pixels, text and all, at the canvas's size.
+        let (width, height, decoded) = decode_png_bytes(&canvas.png().unwrap());
+        assert_eq!((width, height), (canvas.width, canvas.height), "{name}");
+        assert!(decoded == with, "{name}: the PNG is not the painted page");
     }
+}
+
+/// The arm picture against the geometry, not against itself: in the front
+/// view (x right, z up) the payload's grey (the obstacle colour at 35 %
+/// over the white page, the only shape there) where a point inside the
+/// payload projects, clear of its label at the centre and of the arm, which
+/// stays below it; and the page's white above it, between the grid lines.
+#[test]
+fn the_arm_png_draws_the_payload_where_it_projects() {
+    let (problem, t) = payload_bay();
+    let scene = views::arm_scene(&problem, &t, 360.0, 6);
+    let (width, height, pixels) = decode_png_bytes(&scene.canvas.png().unwrap());
+    // Three 360 px panels side by side, with room for the axes and titles.
+    assert!(width > 3 * 360 && height > 360, "{width} x {height}");
+    assert_eq!(width as usize * height as usize * 3, pixels.len());
+    let front = scene.panels[1];
+    assert_eq!(front.axes, (0, 2), "the front view");
+    let pixel = |q: [f64; 3]| -> [u8; 3] {
+        let (x, y) = front.map(&q);
+        let i = (y.round() as usize * width as usize + x.round() as usize) * 3;
+        [pixels[i], pixels[i + 1], pixels[i + 2]]
+    };
+    let o = problem
+        .obstacle_names
+        .iter()
+        .position(|n| n == "payload")
+        .unwrap();
+    let (c, a) = (
+        problem.obstacles[o].centre.map(f64::from),
+        problem.obstacles[o].semi_axes.map(f64::from),
+    );
+    // (2/3)^8 + (5/9)^2 < 1: inside the payload (exponents 8, 2, 2).
+    let inside = [c[0] + a[0] * 2.0 / 3.0, c[1], c[2] + a[2] * 5.0 / 9.0];
+    let grey = views::OBSTACLE.map(|k| (255.0 - 0.35 * (255.0 - k as f64)).round() as u8);
+    assert_eq!(pixel(inside), grey, "the payload at {inside:?}");
+    // Above the payload's top (z = 50), between the grid lines (x = 40 and
+    // 60, z = 60 and 80): nothing drawn.
+    let above = [c[0] - a[0] * 2.0 / 3.0, c[1], c[2] + 2.0 * a[2]];
+    assert_eq!(pixel(above), [255; 3], "the page at {above:?}");
 }

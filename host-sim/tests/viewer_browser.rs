@@ -7,6 +7,8 @@
 //! `chromium` and sets it): there a skip is a failure. `CAPP_CHROMIUM`
 //! names the browser to use.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -194,8 +196,9 @@ fn viewer_draws_in_a_real_browser() {
 }
 
 /// The side panel says which escape the step is in: the planar arm of
-/// `tests/escapes.rs` detours round a post, and the page opened at a frame
-/// of the detour shows it.
+/// `tests/escapes.rs` detours round a low wall it is trapped behind
+/// (`common::planar_trap`), and the page opened at a frame of the detour
+/// shows it.
 #[test]
 fn viewer_shows_the_escape_under_way() {
     let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
@@ -207,15 +210,7 @@ fn viewer_shows_the_escape_under_way() {
         eprintln!("SKIPPED viewer_shows_the_escape_under_way: no Chromium found");
         return;
     };
-    let joint = "[[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n";
-    let text = format!(
-        "name = \"detour\"\nstart = [0.0, 0.5, 0.5]\n\
-         [units]\nangle = \"radians\"\nlength = \"inches\"\n\
-         {joint}{joint}{joint}\
-         [target]\nposition = [24.2, -13.2, 0.0]\n\
-         [[obstacles]]\nname = \"post\"\ncentre = [25.0, -0.5, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
-         [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n"
-    );
+    let text = common::planar_trap("detour", 5.0);
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("detour.toml");
     std::fs::write(&file, text).unwrap();

@@ -2,8 +2,11 @@
 //! `Planner::restart`) against the by-value ones: the same checks, the same
 //! errors, the same plan to the bit, on values that held another plan before.
 
+mod common;
+
 use capp_core::kinematics::{forward_kinematics, Frames};
 use capp_core::*;
+use common::planar;
 
 type Sc = Scenario<18, 4, 3>;
 /// Joints, obstacles, waypoints and settings, as `Scenario::init` takes them.
@@ -42,11 +45,10 @@ fn trajectory(scenario: &Sc, planner: &mut Planner<18>) -> (Vec<Vec<u32>>, Outco
 
 /// A different, smaller plan first, so the in-place values hold stale state.
 fn used() -> (Sc, Planner<18>) {
-    let planar = [Joint::revolute(0.0, 10.0, 0.0, -3.0, 3.0, 1.0); 3];
     let mut scenario = Sc::empty();
     scenario
         .init(
-            &planar,
+            &planar(),
             &[SuperEllipsoid::aligned([0.0, 25.0, 0.0], [2.0; 3], 2.0)],
             &[
                 Waypoint::at([5.0, 20.0, 0.0]),

@@ -10,99 +10,6 @@ use capp_core::planner::StartError;
 use capp_core::*;
 use common::*;
 
-/// Room for PIPS (18 joints), 8 obstacles and 4 waypoints; smaller robots fit too.
-type Pips = Scenario<18, 8, 4>;
-
-fn scenario(
-    joints: &[Joint],
-    obstacles: &[SuperEllipsoid],
-    waypoints: &[Waypoint],
-    settings: Settings,
-) -> Pips {
-    let robot = Robot::new(joints).unwrap();
-    Scenario::new(
-        robot,
-        obstacles,
-        &Mission::new(waypoints, settings).unwrap(),
-    )
-    .unwrap()
-}
-
-/// Everything a run did, with the invariants checked at every step.
-struct Run {
-    outcome: Outcome,
-    steps: u32,
-    v: Vec<f32>,
-    /// Per step: joint rates and position error.
-    rates: Vec<(Vec<f32>, f32)>,
-}
-
-/// Runs to the end, checking after every step: limits, rate limits, finite
-/// values, and (independently, in f64) every avoidance point outside every
-/// inflated obstacle.
-fn run_checked(sc: &Pips, start: &[f32]) -> Run {
-    let joints = sc.robot().joints().to_vec();
-    let s = sc.settings();
-    let margins = (
-        s.avoidance.joint_margin as f64,
-        s.avoidance.link_margin as f64,
-    );
-    let interior = s.avoidance.points_per_link as usize;
-    let obstacles: Vec<SuperEllipsoid> = sc.obstacles().iter().map(|o| *o.source()).collect();
-    let mut planner = Planner::new(sc, start).unwrap();
-    let mut previous = planner.joints().to_vec();
-    let mut run = Run {
-        outcome: Outcome::Capped,
-        steps: 0,
-        v: vec![planner.last_report().v],
-        rates: vec![],
-    };
-    let outcome = planner
-        .run(sc, |p, r| {
-            let q = p.joints();
-            for (j, joint) in joints.iter().enumerate() {
-                assert!(q[j].is_finite(), "step {}: joint {j} not finite", r.step);
-                assert!(
-                    q[j] >= joint.min && q[j] <= joint.max,
-                    "step {}: joint {j} = {} outside [{}, {}]",
-                    r.step,
-                    q[j],
-                    joint.min,
-                    joint.max
-                );
-                let moved = (q[j] - previous[j]).abs();
-                // f32: the new value is rounded to its own precision, which
-                // for a prismatic joint tens of units out is a few 1e-6.
-                let rounding = 2.0 * f32::EPSILON * q[j].abs().max(previous[j].abs());
-                let allowed = r.time_step_s * joint.max_rate * (1.0 + 1e-5) + 1e-6 + rounding;
-                assert!(
-                    moved <= allowed,
-                    "step {}: joint {j} moved {moved} > {allowed}",
-                    r.step
-                );
-            }
-            assert!(
-                r.v.is_finite() && r.position_error.is_finite() && r.orientation_error.is_finite()
-            );
-            if !obstacles.is_empty() {
-                let q64: Vec<f64> = q.iter().map(|&x| x as f64).collect();
-                let c = min_clearance64(&joints, &q64, &obstacles, margins, interior);
-                assert!(
-                    c > 0.0,
-                    "step {}: an avoidance point is inside an inflated obstacle (C - 1 = {c})",
-                    r.step
-                );
-            }
-            previous.copy_from_slice(q);
-            run.v.push(r.v);
-            run.rates.push((p.rates().to_vec(), r.position_error));
-        })
-        .unwrap();
-    run.outcome = outcome;
-    run.steps = planner.last_report().step;
-    run
-}
-
 fn pips_target(rng: &mut Rng) -> ([f32; 3], [[f32; 3]; 3]) {
     let joints = pips::joints();
     let q: Vec<f32> = joints
@@ -223,43 +130,125 @@ fn obstacles_across_the_straight_path_are_avoided_and_targets_reached() {
     );
 }
 
-/// Three revolute links of 10 in the x-y plane sweep the hand from
-/// (24.2, 13.2) to (24.2, -13.2); a tall box, 5 in deep along x, stands
-/// across that straight path. (At 3 in deep the damped law, since its
-/// projection may take the joint metric, slides the hand round the box's
-/// near edge: no dead end to test.)
-fn planar_box_scenario(waypoints: &[Waypoint], escape_attempts: u8) -> (Pips, [f32; 3]) {
-    let link = Joint::revolute(0.0, 10.0, 0.0, -2.8, 2.8, 0.5);
-    let joints = [link; 3];
-    let mut settings = Settings::default();
+/// The planar arm, 3 avoidance points per link, with `obstacles` and
+/// `waypoints`, and `escape_attempts`.
+fn planar_scenario(
+    obstacles: &[SuperEllipsoid],
+    waypoints: &[Waypoint],
+    escape_attempts: u8,
+) -> Sc {
+    let mut settings = planar_settings(1.0);
     settings.escape.attempts = escape_attempts;
-    settings.avoidance.joint_margin = 1.0;
-    settings.avoidance.link_margin = 0.5;
     settings.avoidance.points_per_link = 3;
-    settings.avoidance.influence_distance = 5.0;
-    let the_box = SuperEllipsoid::aligned([25.0, 0.0, 0.0], [2.5, 1.5, 20.0], 8.0);
-    (
-        scenario(&joints, &[the_box], waypoints, settings),
-        [0.0, 0.5, 0.5],
-    )
+    scenario(&planar(), obstacles, waypoints, settings)
+}
+
+/// The trap: the planar arm starts at `TRAP_START`, its hand at
+/// (28.38, 4.79); the target is that point's mirror image across y = 0, at
+/// `d0` = 9.59 in from the hand (the configuration `-TRAP_START` reaches it).
+/// A wall along y = 0 from x = 17 to x = 39 stands between them. Every
+/// point of the disk of radius `d0` round the target that lies on y = 0 has
+/// x in [20.07, 36.68] (half chord sqrt(d0^2 - 4.79^2) = 8.30 round x =
+/// 28.38), inside the bare wall: the wall cuts that disk in two, the hand
+/// on one side, the target on the other. So every collision-free path of
+/// the hand to the target (the hand moves in the plane z = 0 only) leaves
+/// the disk: the position error, and with it V, must first rise above its
+/// value at the start. No law that keeps V at or below where it started can
+/// pass, however good. A path exists, though: round the wall's inner end
+/// (x < 16 with the margin; the outer end, at 39, is beyond the arm's reach
+/// of 30), folded. `trap_is_a_dead_end_by_construction` checks the
+/// geometry.
+const TRAP_START: [f32; 3] = [0.5, -0.3, -0.4];
+
+fn trap_wall() -> SuperEllipsoid {
+    SuperEllipsoid::aligned([28.0, 0.0, 0.0], [11.0, 1.0, 50.0], 8.0)
+}
+
+fn trap_target() -> [f32; 3] {
+    let (hand, _) = pose_of(&planar(), &TRAP_START);
+    [hand[0], -hand[1], 0.0]
 }
 
 #[test]
-fn a_planar_arm_stalls_at_a_box_and_passes_it_with_a_waypoint_or_an_escape() {
-    // Straight at it, the arm presses on the box top: a dead end, detected
-    // (escapes off).
-    let target = Waypoint::at([24.2, -13.2, 0.0]);
-    let (sc, start) = planar_box_scenario(&[target], 0);
-    let run = run_checked(&sc, &start);
+fn trap_is_a_dead_end_by_construction() {
+    let (hand, _) = pose_of(&planar(), &TRAP_START);
+    let target = trap_target();
+    let d0 = (hand[1] - target[1]).abs() as f64;
+    assert!(hand[1] > 0.0 && (hand[0] - target[0]).abs() < 1e-6);
+    // The disk's chord along y = 0 lies inside the bare wall (C <= 1).
+    let half = (d0 * d0 - (hand[1] as f64).powi(2)).sqrt();
+    for i in 0..=100 {
+        let x = target[0] as f64 - half + 2.0 * half * i as f64 / 100.0;
+        assert!(c64(&trap_wall(), 0.0, [x, 0.0, 0.0]) <= 1.0, "x = {x}");
+    }
+    // Free space reaches the target: the mirrored configuration is there.
+    let mirrored = TRAP_START.map(|q| -q);
+    assert!(miss(&planar(), &mirrored, target) < 1e-4);
+}
+
+#[test]
+fn a_planar_arm_stalls_in_a_trap_and_leaves_it_with_waypoints_or_an_escape() {
+    let target = Waypoint::at(trap_target());
+    let tolerance = Settings::default().position_tolerance;
+    // Escapes off: the law descends V and the trap (see `TRAP_START`) has
+    // no descending way out; a dead end, detected well before the cap.
+    let sc = planar_scenario(&[trap_wall()], &[target], 0);
+    let run = run_checked(&sc, &TRAP_START);
     assert_eq!(run.outcome, Outcome::Stalled);
-    // The operator's remedy (paper, section 5): a waypoint inside the box.
-    let (sc, start) = planar_box_scenario(&[Waypoint::at([19.0, 0.0, 0.0]), target], 0);
-    let run = run_checked(&sc, &start);
+    assert!(run.steps < sc.settings().max_steps);
+    let (hand, _) = pose_of(&planar(), &run.joints);
+    assert!(hand[1] > 0.0, "still on the start side: {hand:?}");
+    // The operator's remedy (paper, section 5): waypoints round the wall's
+    // inner end.
+    let round = [
+        Waypoint::at([11.0, 6.0, 0.0]),
+        Waypoint::at([11.0, -6.0, 0.0]),
+        target,
+    ];
+    let sc = planar_scenario(&[trap_wall()], &round, 0);
+    let run = run_checked(&sc, &TRAP_START);
     assert_eq!(run.outcome, Outcome::Reached);
-    // The planner's own: escapes on, it walks out of the dead end and round.
-    let (sc, start) = planar_box_scenario(&[target], Settings::default().escape.attempts);
-    let run = run_checked(&sc, &start);
+    assert!(miss(&planar(), &run.joints, trap_target()) <= tolerance + 1e-4);
+    // The planner's own: escapes on, it leaves the trap and goes round,
+    // never touching the wall (`run_checked`).
+    let sc = planar_scenario(
+        &[trap_wall()],
+        &[target],
+        Settings::default().escape.attempts,
+    );
+    let run = run_checked(&sc, &TRAP_START);
     assert_eq!(run.outcome, Outcome::Reached);
+    assert!(run.escape_steps > 0, "it escaped");
+    assert!(miss(&planar(), &run.joints, trap_target()) <= tolerance + 1e-4);
+}
+
+/// A wall across the planar arm's whole reach: the band 18.5 <= x <= 21.5,
+/// 40 in either way along y (and 50 along z). The arm's hand is never more
+/// than 30 in from its base at the origin, so a hand path from x < 20 to x >
+/// 20 crosses the line x = 20 at |y| <= 30, inside the bare wall. The
+/// target (25, 5) is within reach (25.5 in) but behind it: unreachable
+/// without a collision, whatever the law or the escape.
+fn closed_wall() -> SuperEllipsoid {
+    SuperEllipsoid::aligned([20.0, 0.0, 0.0], [1.5, 40.0, 50.0], 8.0)
+}
+
+#[test]
+fn a_planar_arm_behind_a_wall_across_its_reach_stalls_escapes_or_not() {
+    let target: [f32; 3] = [25.0, 5.0, 0.0];
+    assert!(target[0].hypot(target[1]) < PLANAR_REACH);
+    for y in [-30.0, 0.0, 30.0] {
+        assert!(c64(&closed_wall(), 0.0, [20.0, y, 0.0]) <= 1.0);
+    }
+    let start = [0.5, 0.5, 0.5];
+    for attempts in [0, Settings::default().escape.attempts] {
+        let sc = planar_scenario(&[closed_wall()], &[Waypoint::at(target)], attempts);
+        let run = run_checked(&sc, &start);
+        assert_eq!(run.outcome, Outcome::Stalled, "{attempts} attempts");
+        assert!(run.steps < sc.settings().max_steps, "{attempts} attempts");
+        assert_eq!(run.escape_steps > 0, attempts > 0, "{attempts} attempts");
+        let (hand, _) = pose_of(&planar(), &run.joints);
+        assert!(hand[0] < 20.0, "{attempts} attempts: {hand:?}");
+    }
 }
 
 #[test]
@@ -365,7 +354,7 @@ fn bad_inputs_are_errors_not_panics() {
 
     // Obstacles: zero semi-axis, NaN, infinite exponent.
     let zero = SuperEllipsoid::aligned([0.0; 3], [1.0, 0.0, 1.0], 2.0);
-    let err = Pips::new(
+    let err = Sc::new(
         robot(),
         &[zero],
         &mission(good_waypoint, Settings::default()),
@@ -376,14 +365,14 @@ fn bad_inputs_are_errors_not_panics() {
         ScenarioError::Obstacle(ObstacleError::SemiAxisOutOfRange { obstacle: 0 })
     );
     let nan = SuperEllipsoid::aligned([f32::NAN, 0.0, 0.0], [1.0; 3], 2.0);
-    assert!(Pips::new(
+    assert!(Sc::new(
         robot(),
         &[nan],
         &mission(good_waypoint, Settings::default())
     )
     .is_err());
     let inf = SuperEllipsoid::aligned([0.0; 3], [1.0; 3], f32::INFINITY);
-    assert!(Pips::new(
+    assert!(Sc::new(
         robot(),
         &[inf],
         &mission(good_waypoint, Settings::default())
@@ -391,7 +380,7 @@ fn bad_inputs_are_errors_not_panics() {
     .is_err());
 
     // Waypoints: NaN position, a reflection instead of a rotation.
-    let err = Pips::new(
+    let err = Sc::new(
         robot(),
         &[],
         &mission(Waypoint::at([f32::NAN, 0.0, 0.0]), Settings::default()),
@@ -406,10 +395,10 @@ fn bad_inputs_are_errors_not_panics() {
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
     );
     assert!(matches!(
-        Pips::new(robot(), &[], &mission(mirror, Settings::default())),
+        Sc::new(robot(), &[], &mission(mirror, Settings::default())),
         Err(ScenarioError::Mission(MissionError::NotARotation { .. }))
     ));
-    let err = Pips::new(
+    let err = Sc::new(
         robot(),
         &[],
         &Mission {
@@ -440,13 +429,13 @@ fn bad_inputs_are_errors_not_panics() {
         },
     ] {
         assert!(matches!(
-            Pips::new(robot(), &[], &mission(good_waypoint, broken)),
+            Sc::new(robot(), &[], &mission(good_waypoint, broken)),
             Err(ScenarioError::Mission(MissionError::BadSetting(_)))
         ));
     }
 
     // Start configurations.
-    let sc = Pips::new(robot(), &[], &mission(good_waypoint, Settings::default())).unwrap();
+    let sc = Sc::new(robot(), &[], &mission(good_waypoint, Settings::default())).unwrap();
     let mut q = pips::home();
     q[3] = f32::INFINITY;
     assert_eq!(
@@ -468,7 +457,7 @@ fn bad_inputs_are_errors_not_panics() {
     ));
     let (p, _) = pose_of(&joints, &pips::home());
     let around_hand = SuperEllipsoid::aligned(p, [2.0; 3], 2.0);
-    let sc = Pips::new(
+    let sc = Sc::new(
         robot(),
         &[around_hand],
         &mission(good_waypoint, Settings::default()),

@@ -15,8 +15,6 @@ use capp_core::control::LawKind;
 use capp_core::*;
 use common::*;
 
-type Sc = Scenario<18, 4, 2>;
-
 /// `joints` with every length multiplied by `k`.
 fn scale_joints(joints: &[Joint], k: f32) -> Vec<Joint> {
     joints
@@ -76,15 +74,9 @@ fn plan(p: &Problem, k: f32, kind: LawKind) -> (Outcome, Vec<(f32, Vec<f32>)>) {
             ..*o
         })
         .collect();
-    let robot = Robot::new(&joints).unwrap();
-    let mut settings = Settings::for_robot(&robot);
+    let mut settings = Settings::for_robot(&Robot::<18>::new(&joints).unwrap());
     settings.law.kind = kind;
-    let sc = Sc::new(
-        robot,
-        &obstacles,
-        &Mission::new(&[waypoint], settings).unwrap(),
-    )
-    .unwrap();
+    let sc = scenario(&joints, &obstacles, &[waypoint], settings);
     let mut planner = Planner::new(&sc, &start).unwrap();
     let mut rows = vec![(0.0, start.clone())];
     let outcome = planner

@@ -1,8 +1,11 @@
 //! Test support: an f64 model of the arm written from the paper's equations,
-//! independent of the crate's f32 code, and a small seeded random source.
+//! independent of the crate's f32 code, a small seeded random source, the
+//! test robots, and `run_checked`, which runs a plan and checks its
+//! invariants at every step.
 #![allow(dead_code)]
 
-use capp_core::{Joint, JointKind, SuperEllipsoid};
+use capp_core::escape::EscapeState;
+use capp_core::*;
 
 /// SplitMix64: tiny, seeded, reproducible.
 pub struct Rng(pub u64);
@@ -242,4 +245,153 @@ pub fn pose_of(joints: &[Joint], q: &[f32]) -> ([f32; 3], [[f32; 3]; 3]) {
     let p = *chain.origins.last().unwrap();
     let r = *chain.rotations.last().unwrap();
     (p.map(|x| x as f32), r.map(|row| row.map(|x| x as f32)))
+}
+
+/// Room for PIPS (18 joints), 8 obstacles and 4 waypoints; smaller robots fit too.
+pub type Sc = Scenario<18, 8, 4>;
+
+/// A valid scenario (panics on invalid input: the tests build valid ones).
+pub fn scenario(
+    joints: &[Joint],
+    obstacles: &[SuperEllipsoid],
+    waypoints: &[Waypoint],
+    settings: Settings,
+) -> Sc {
+    Sc::new(
+        Robot::new(joints).unwrap(),
+        obstacles,
+        &Mission::new(waypoints, settings).unwrap(),
+    )
+    .unwrap()
+}
+
+/// The planar arm: three revolute links of `10 k` in turning about z (every
+/// point of it stays in the plane z = 0; its reach is `30 k`), limits
+/// +-2.8 rad, 0.5 rad/s.
+pub fn planar_scaled(k: f32) -> [Joint; 3] {
+    [Joint::revolute(0.0, 10.0 * k, 0.0, -2.8, 2.8, 0.5); 3]
+}
+
+/// The planar arm in inches (`planar_scaled(1.0)`).
+pub fn planar() -> [Joint; 3] {
+    planar_scaled(1.0)
+}
+
+/// The planar arm's reach (its links stretched), inches.
+pub const PLANAR_REACH: f32 = 30.0;
+
+/// Default settings with the planar arm's avoidance, in units `k` times
+/// inches: margins of 1 in (joints) and 0.5 in (links), influence 5 in.
+pub fn planar_settings(k: f32) -> Settings {
+    let mut s = Settings::default();
+    s.avoidance.joint_margin = 1.0 * k;
+    s.avoidance.link_margin = 0.5 * k;
+    s.avoidance.influence_distance = 5.0 * k;
+    s
+}
+
+/// Everything a run did, with the invariants checked at every step.
+pub struct Run {
+    pub outcome: Outcome,
+    pub steps: u32,
+    /// `V` at the start and after every step.
+    pub v: Vec<f32>,
+    /// Per step: joint rates and position error.
+    pub rates: Vec<(Vec<f32>, f32)>,
+    /// Steps taken while escaping a dead end (not descending).
+    pub escape_steps: u32,
+    /// The final configuration.
+    pub joints: Vec<f32>,
+    /// The final step's report.
+    pub last: StepReport,
+}
+
+/// Runs to the end, checking after every step: limits, rate limits, finite
+/// values (joints, rates, `V`, errors, time step), and (independently, in
+/// f64) every avoidance point outside every inflated obstacle.
+pub fn run_checked(sc: &Sc, start: &[f32]) -> Run {
+    let joints = sc.robot().joints().to_vec();
+    let s = sc.settings();
+    let margins = (
+        s.avoidance.joint_margin as f64,
+        s.avoidance.link_margin as f64,
+    );
+    let interior = s.avoidance.points_per_link as usize;
+    let obstacles: Vec<SuperEllipsoid> = sc.obstacles().iter().map(|o| *o.source()).collect();
+    let mut planner = Planner::new(sc, start).unwrap();
+    let mut previous = planner.joints().to_vec();
+    let mut v = vec![planner.last_report().v];
+    let mut rates = vec![];
+    let mut escape_steps = 0;
+    let outcome = planner
+        .run(sc, |p, r| {
+            let q = p.joints();
+            assert!(
+                r.v.is_finite()
+                    && r.position_error.is_finite()
+                    && r.orientation_error.is_finite()
+                    && r.time_step_s.is_finite(),
+                "step {}: {r:?}",
+                r.step
+            );
+            for (j, joint) in joints.iter().enumerate() {
+                assert!(
+                    q[j].is_finite() && p.rates()[j].is_finite(),
+                    "step {}: joint {j} or its rate not finite",
+                    r.step
+                );
+                assert!(
+                    q[j] >= joint.min && q[j] <= joint.max,
+                    "step {}: joint {j} = {} outside [{}, {}]",
+                    r.step,
+                    q[j],
+                    joint.min,
+                    joint.max
+                );
+                let moved = (q[j] - previous[j]).abs();
+                // f32: the new value is rounded to its own precision, which
+                // for a prismatic joint tens of units out is a few 1e-6.
+                let rounding = 2.0 * f32::EPSILON * q[j].abs().max(previous[j].abs());
+                let allowed = r.time_step_s * joint.max_rate * (1.0 + 1e-5) + 1e-6 + rounding;
+                assert!(
+                    moved <= allowed,
+                    "step {}: joint {j} moved {moved} > {allowed}",
+                    r.step
+                );
+            }
+            if !obstacles.is_empty() {
+                let q64: Vec<f64> = q.iter().map(|&x| x as f64).collect();
+                let c = min_clearance64(&joints, &q64, &obstacles, margins, interior);
+                assert!(
+                    c > 0.0,
+                    "step {}: an avoidance point is inside an inflated obstacle (C - 1 = {c})",
+                    r.step
+                );
+            }
+            if !matches!(r.escape, EscapeState::Descending { .. }) {
+                escape_steps += 1;
+            }
+            previous.copy_from_slice(q);
+            v.push(r.v);
+            rates.push((p.rates().to_vec(), r.position_error));
+        })
+        .unwrap();
+    Run {
+        outcome,
+        steps: planner.last_report().step,
+        v,
+        rates,
+        escape_steps,
+        joints: planner.joints().to_vec(),
+        last: *planner.last_report(),
+    }
+}
+
+/// Distance from the hand of `q` (f64 forward kinematics) to `target`.
+pub fn miss(joints: &[Joint], q: &[f32], target: [f32; 3]) -> f32 {
+    let (p, _) = pose_of(joints, q);
+    (0..3)
+        .map(|i| (p[i] - target[i]).powi(2))
+        .sum::<f32>()
+        .sqrt()
 }

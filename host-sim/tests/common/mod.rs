@@ -1,0 +1,51 @@
+//! Test support shared by the host-sim tests: a planar dead end by
+//! construction, as scenario text.
+#![allow(dead_code)]
+
+/// The planar arm of `capp-core`'s tests (links of 10 in, reach 30 in),
+/// starting at `START`, its hand at (28.96, 2.90); the target is the hand's
+/// mirror image across y = 0, 5.80 in away. A wall along y = 0, from
+/// x = 23 to x = 37, 1 in thick, of half-height `half_height`, stands
+/// between them. A dead end by construction, not by tuning: the disk of
+/// radius 5.80 round the target meets y = 0 in x within 28.96 -+ 5.02 (half
+/// chord sqrt(5.80^2 - 2.90^2)), inside the wall, so the wall cuts the disk
+/// in two with the hand and the target on either side. Every collision-free
+/// path of the hand (which moves in the plane z = 0 only) leaves the disk:
+/// V must first rise above its start value, which no descent of V does,
+/// however good the law. A path exists round the wall's inner end (its outer
+/// end is beyond the reach). A low wall (half-height 5) is small enough to
+/// be detoured round; a tall one (20: its inflated box more than half the
+/// reach) is not, and is escaped by a walk.
+const START: [f64; 3] = [0.4, -0.3, -0.3];
+const WALL_CENTRE_X: f64 = 30.0;
+const WALL_HALF_LENGTH: f64 = 7.0;
+
+/// The hand at `START`, (x, y).
+fn start_hand() -> (f64, f64) {
+    let (mut x, mut y, mut angle) = (0.0, 0.0, 0.0);
+    for q in START {
+        angle += q;
+        x += 10.0 * f64::cos(angle);
+        y += 10.0 * f64::sin(angle);
+    }
+    (x, y)
+}
+
+/// The trap as a scenario file's text, named `name`.
+pub fn planar_trap(name: &str, half_height: f64) -> String {
+    let (x, y) = start_hand();
+    // The construction holds: the chord of the start error's disk round the
+    // target, along y = 0, lies within the wall's length.
+    let half_chord = ((2.0 * y).powi(2) - y * y).sqrt();
+    assert!(y > 0.0 && (x - WALL_CENTRE_X).abs() + half_chord < WALL_HALF_LENGTH);
+    let joint = "[[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n";
+    format!(
+        "name = \"{name}\"\nstart = {START:?}\n\
+         [units]\nangle = \"radians\"\nlength = \"inches\"\n\
+         {joint}{joint}{joint}\
+         [target]\nposition = [{x}, {}, 0.0]\n\
+         [[obstacles]]\nname = \"post\"\ncentre = [{WALL_CENTRE_X}, 0.0, 0.0]\nsemi_axes = [{WALL_HALF_LENGTH}, 0.5, {half_height}]\nexponent = 8.0\n\
+         [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n",
+        -y
+    )
+}
