@@ -30,15 +30,15 @@
 mod motion;
 mod progress;
 mod report;
+mod start;
 mod waypoints;
 
 pub use report::{Outcome, Phase, StartError, StepError, StepReport};
 
-use crate::avoidance::Clearance;
 use crate::control::law::{propose, LawWorkspace};
 use crate::control::{Drive, Proposal};
 use crate::escape::search::Scratch;
-use crate::escape::{worth_escaping, Escape, EscapeState, Leg, Stall};
+use crate::escape::{worth_escaping, Escape, Leg, Stall};
 use crate::evaluation::{target_error, Evaluations};
 use crate::kinematics::Frames;
 use crate::math::all_finite;
@@ -99,135 +99,10 @@ impl<const N: usize> Planner<N> {
             phase: Phase::Done(Outcome::Stalled),
             error_step: 0.0,
             progress: Progress::new(),
-            last: StepReport {
-                step: 0,
-                time_step_s: 0.0,
-                v: 0.0,
-                position_error: 0.0,
-                orientation_error: 0.0,
-                clearance: None,
-                phase: Phase::Done(Outcome::Stalled),
-                constrained: false,
-                halvings: 0,
-                escape: EscapeState::Descending { attempts: 0 },
-            },
+            last: StepReport::at_start(Phase::Done(Outcome::Stalled)),
         };
         planner.reset(&[]);
         planner
-    }
-
-    /// [`Planner::new`] in place: the same checks and the same plan (to the
-    /// bit), without a planner-sized value on the stack. On error `self` is
-    /// left as [`Planner::empty`].
-    pub fn restart<const M: usize, const W: usize>(
-        &mut self,
-        scenario: &Scenario<N, M, W>,
-        start: &[f32],
-    ) -> Result<(), StartError> {
-        let result = self.begin(scenario, start);
-        if result.is_err() {
-            self.clear();
-        }
-        result
-    }
-
-    /// Makes this planner [`Planner::empty`], in place.
-    pub fn clear(&mut self) {
-        self.reset(&[]);
-    }
-
-    fn begin<const M: usize, const W: usize>(
-        &mut self,
-        scenario: &Scenario<N, M, W>,
-        start: &[f32],
-    ) -> Result<(), StartError> {
-        let robot = scenario.robot();
-        let n = robot.len();
-        if start.len() != n {
-            return Err(StartError::WrongLength {
-                given: start.len(),
-                joints: n,
-            });
-        }
-        if let Some(joint) = start.iter().position(|x| !x.is_finite()) {
-            return Err(StartError::NotFinite { joint: joint as u8 });
-        }
-        if let Some(joint) = robot.first_outside_limits(start) {
-            return Err(StartError::OutsideLimits { joint: joint as u8 });
-        }
-        self.reset(start);
-        self.escape.reset(scenario.settings().escape.seed, start);
-        // Scenario::new refuses a mission without waypoints, so this never fails.
-        let Some(&target) = scenario.targets().first() else {
-            return Err(StartError::ScenarioMismatch);
-        };
-        let n = self.n.min(N);
-        self.evals
-            .now_mut()
-            .evaluate(scenario, &self.q[..n], &target);
-        if !self.evals.now().field.clear {
-            let c = self.evals.now().field.clearance.unwrap_or(Clearance {
-                value: 0.0,
-                point: 0,
-                obstacle: 0,
-            });
-            return Err(StartError::InObstacle {
-                point: c.point,
-                obstacle: c.obstacle,
-            });
-        }
-        self.progress.restart(self.evals.now().error.v, 0);
-        self.last = self.report(0.0, false, 0);
-        Ok(())
-    }
-
-    /// Every field to its value at the start of a plan from `start` (at most
-    /// `N` values; none: the empty planner), in place.
-    fn reset(&mut self, start: &[f32]) {
-        // Every field is named: a field added to `Planner` fails to compile here.
-        let Planner {
-            n,
-            q,
-            evals,
-            q_next,
-            rate,
-            law,
-            escape,
-            step,
-            phase,
-            error_step,
-            progress,
-            last,
-        } = self;
-        let len = start.len().min(N);
-        *n = len;
-        q.fill(0.0);
-        q[..len].copy_from_slice(&start[..len]);
-        evals.reset();
-        *q_next = *q;
-        rate.fill(0.0);
-        law.clear();
-        escape.reset(0, start);
-        *step = 0;
-        *phase = if len == 0 {
-            Phase::Done(Outcome::Stalled)
-        } else {
-            Phase::Moving { waypoint: 0 }
-        };
-        *error_step = 0.0;
-        *progress = Progress::new();
-        *last = StepReport {
-            step: 0,
-            time_step_s: 0.0,
-            v: 0.0,
-            position_error: 0.0,
-            orientation_error: 0.0,
-            clearance: None,
-            phase: *phase,
-            constrained: false,
-            halvings: 0,
-            escape: EscapeState::Descending { attempts: 0 },
-        };
     }
 
     /// The current joint vector (`n` values: radians or length units).

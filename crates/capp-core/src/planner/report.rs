@@ -139,3 +139,21 @@ pub struct StepReport {
     /// Whether the planner is escaping a dead end, and which attempt.
     pub escape: EscapeState,
 }
+
+impl StepReport {
+    /// The report of a plan that has taken no step, in `phase`.
+    pub const fn at_start(phase: Phase) -> Self {
+        StepReport {
+            step: 0,
+            time_step_s: 0.0,
+            v: 0.0,
+            position_error: 0.0,
+            orientation_error: 0.0,
+            clearance: None,
+            phase,
+            constrained: false,
+            halvings: 0,
+            escape: EscapeState::Descending { attempts: 0 },
+        }
+    }
+}
