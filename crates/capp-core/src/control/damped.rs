@@ -306,9 +306,6 @@ pub fn rotation_error<const N: usize>(frames: &Frames<N>, error: &PoseError) -> 
 /// `input.step.time_step_s`, projected against the obstacles (eq. 24, its
 /// guard from `input`'s gradient and closest pair). `rate` holds
 /// `robot.len()` values.
-// Not inlined into `propose`: one copy of each law, as before the
-// interface (flash).
-#[inline(never)]
 pub fn damped_rate<const N: usize>(
     input: &LawInput<'_, N>,
     ws: &mut DampedWorkspace<N>,
