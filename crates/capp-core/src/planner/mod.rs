@@ -240,6 +240,8 @@ impl<const N: usize> Planner<N> {
 
     /// A step of the escape's search: the arm holds still while a slice of
     /// it runs in the candidate's buffers.
+    // Not inlined: cold, and out of the step's hot loops.
+    #[inline(never)]
     fn search_step<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
@@ -371,6 +373,8 @@ impl<const N: usize> Planner<N> {
 
     /// A dead end short of `target`: escape, or (nothing to escape from, or
     /// escapes off) end `Stalled`.
+    // Not inlined: cold, and out of the step's hot loops.
+    #[inline(never)]
     fn on_stall<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
