@@ -246,12 +246,17 @@ pub fn slice<const N: usize, const M: usize, const W: usize>(
     s: &mut Scratch<'_, N>,
 ) -> Slice {
     let mut spent = 0u16;
+    let im = &mut Imagination {
+        scenario,
+        target,
+        s,
+    };
     while spent < SEARCH_EVALUATIONS {
         let slice = match search.stage {
-            Stage::Goal => goal_unit(search, rng, scenario, target, s, &mut spent),
-            Stage::Trunk => trunk_unit(search, scenario, target, s, &mut spent),
-            Stage::Grow => grow_unit(search, rng, scenario, target, s, &mut spent),
-            Stage::Shortcut => shortcut_unit(search, scenario, target, s, &mut spent),
+            Stage::Goal => goal_unit(search, rng, im, &mut spent),
+            Stage::Trunk => trunk_unit(search, im, &mut spent),
+            Stage::Grow => grow_unit(search, rng, im, &mut spent),
+            Stage::Shortcut => shortcut_unit(search, im, &mut spent),
         };
         if slice != Slice::Working {
             return slice;
@@ -274,30 +279,28 @@ fn draw_configuration<const N: usize>(rng: &mut Rng, robot: &Robot<N>, q: &mut [
 fn goal_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
     rng: &mut Rng,
-    scenario: &Scenario<N, M, W>,
-    target: &Target,
-    s: &mut Scratch<'_, N>,
+    im: &mut Imagination<'_, '_, N, M, W>,
     spent: &mut u16,
 ) -> Slice {
-    let (settings, robot) = (scenario.settings(), scenario.robot());
-    let n = robot.len().min(N);
+    let scenario = im.scenario;
+    let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
     let edge_s = EDGE_STEPS * settings.time_step_s;
     if !search.probing {
         if search.descents >= DESCENTS {
             return Slice::Failed;
         }
         search.descents += 1;
-        draw_configuration(rng, robot, s.q);
+        draw_configuration(rng, robot, im.s.q);
         *spent += 1;
-        if imagine_accept(scenario, target, f32::INFINITY, s) {
-            search.probe = *s.q;
+        if im.accept(f32::INFINITY) {
+            search.probe = *im.s.q;
             search.probing = true;
             search.probe_steps = 0;
         }
         return Slice::Working;
     }
     let near = GOAL_NEAR * settings.position_tolerance;
-    let v = s.next.error.v;
+    let v = im.s.next.error.v;
     if v <= 0.5 * near * near {
         search.goal = search.probe;
         search.stage = Stage::Trunk;
@@ -309,13 +312,11 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
     }
     search.probe_steps += 1;
     let probe = search.probe;
-    let c = s.next.closest();
+    let c = im.s.next.closest();
     *spent += 1;
-    let taken = imagine_law_step(scenario, &probe[..n], edge_s, s) > 0.0
-        && imagine_accept(scenario, target, c, s)
-        && s.next.error.v < v;
+    let taken = im.law_step(&probe[..n], edge_s) > 0.0 && im.accept(c) && im.s.next.error.v < v;
     if taken {
-        search.probe = *s.q;
+        search.probe = *im.s.q;
     } else {
         search.probing = false;
     }
@@ -325,13 +326,11 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
 /// The trunk's next step away from the surface the dead end is on.
 fn trunk_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
-    scenario: &Scenario<N, M, W>,
-    target: &Target,
-    s: &mut Scratch<'_, N>,
+    im: &mut Imagination<'_, '_, N, M, W>,
     spent: &mut u16,
 ) -> Slice {
-    let (settings, robot) = (scenario.settings(), scenario.robot());
-    let n = robot.len().min(N);
+    let scenario = im.scenario;
+    let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
     let edge_s = EDGE_STEPS * settings.time_step_s;
     if search.trunk_steps >= TRUNK_STEPS {
         search.stage = Stage::Grow;
@@ -340,29 +339,28 @@ fn trunk_unit<const N: usize, const M: usize, const W: usize>(
     search.trunk_steps += 1;
     let base = search.base as usize;
     let qa = *search.tree.node(base);
-    s.next.evaluate(scenario, &qa[..n], target);
+    im.evaluate(&qa[..n]);
     *spent += 2;
-    let c_a = s.next.closest();
+    let c_a = im.s.next.closest();
     let mut leave = c_a >= settings.avoidance.engage_clearance;
     if !leave {
         // Down the potential in the metric of the rate limits.
         for (j, joint) in robot.joints().iter().enumerate().take(n) {
-            s.rate[j] = -s.next.mu[j] * joint.max_rate * joint.max_rate;
+            im.s.rate[j] = -im.s.next.mu[j] * joint.max_rate * joint.max_rate;
         }
-        let t = time_at_limits(robot, &s.rate[..n]);
+        let t = time_at_limits(robot, &im.s.rate[..n]);
         leave = !(t > 0.0 && t.is_finite());
         if !leave {
-            s.rate[..n].iter_mut().for_each(|r| *r /= t);
-            leave = imagine_move(scenario, &qa[..n], edge_s, s) <= 0.0
-                || !imagine_accept(scenario, target, c_a, s);
+            im.s.rate[..n].iter_mut().for_each(|r| *r /= t);
+            leave = im.advance(&qa[..n], edge_s) <= 0.0 || !im.accept(c_a);
         }
     }
-    let v = s.next.error.v;
+    let v = im.s.next.error.v;
     if leave {
         search.stage = Stage::Grow;
         return Slice::Working;
     }
-    match search.tree.push(&s.q[..n], base, v) {
+    match search.tree.push(&im.s.q[..n], base, v) {
         Some(i) => search.base = i as u8,
         None => search.stage = Stage::Grow,
     }
@@ -374,13 +372,11 @@ fn trunk_unit<const N: usize, const M: usize, const W: usize>(
 fn grow_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
     rng: &mut Rng,
-    scenario: &Scenario<N, M, W>,
-    target: &Target,
-    s: &mut Scratch<'_, N>,
+    im: &mut Imagination<'_, '_, N, M, W>,
     spent: &mut u16,
 ) -> Slice {
-    let (settings, robot) = (scenario.settings(), scenario.robot());
-    let n = robot.len().min(N);
+    let scenario = im.scenario;
+    let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
     let edge_s = EDGE_STEPS * settings.time_step_s;
     if search.extensions >= EXTENSIONS || search.tree.is_full() {
         return Slice::Failed;
@@ -389,57 +385,57 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
     let goal = search.goal;
     let a = match search.connecting {
         Some(a) => {
-            *s.q = goal;
+            *im.s.q = goal;
             a as usize
         }
         None => {
             if rng.uniform() < 2.0 * GOAL_BIAS - 1.0 {
-                *s.q = goal;
+                *im.s.q = goal;
                 search.connecting = Some(0);
             } else {
-                draw_configuration(rng, robot, s.q);
+                draw_configuration(rng, robot, im.s.q);
             }
-            search.tree.nearest(robot, &s.q[..n])
+            search.tree.nearest(robot, &im.s.q[..n])
         }
     };
     let qa = *search.tree.node(a);
-    let sample = *s.q;
+    let sample = *im.s.q;
     for j in 0..n {
-        s.rate[j] = (sample[j] - qa[j]) / edge_s;
+        im.s.rate[j] = (sample[j] - qa[j]) / edge_s;
     }
-    let t = time_at_limits(robot, &s.rate[..n]);
+    let t = time_at_limits(robot, &im.s.rate[..n]);
     if t > 1.0 {
-        s.rate[..n].iter_mut().for_each(|r| *r /= t);
+        im.s.rate[..n].iter_mut().for_each(|r| *r /= t);
     }
     // The edge, checked at configurations along it: a plan, not a motion
     // (the walk along it checks each of its steps).
-    s.next.evaluate(scenario, &qa[..n], target);
+    im.evaluate(&qa[..n]);
     *spent += 1;
-    let mut c_from = s.next.closest();
-    let mut clear = all_finite(&s.rate[..n]);
+    let mut c_from = im.s.next.closest();
+    let mut clear = all_finite(&im.s.rate[..n]);
     for k in 1..=EDGE_CHECKS {
         if !clear {
             break;
         }
         let along = edge_s * k as f32 / EDGE_CHECKS as f32;
         for (j, joint) in robot.joints().iter().enumerate().take(n) {
-            s.q[j] = joint.clamp(qa[j] + along * s.rate[j]);
+            im.s.q[j] = joint.clamp(qa[j] + along * im.s.rate[j]);
         }
         *spent += 1;
-        clear = imagine_accept(scenario, target, c_from, s);
-        c_from = s.next.closest();
+        clear = im.accept(c_from);
+        c_from = im.s.next.closest();
     }
     if !clear {
         search.connecting = None;
         return Slice::Working;
     }
-    let Some(i) = search.tree.push(&s.q[..n], a, s.next.error.v) else {
+    let Some(i) = search.tree.push(&im.s.q[..n], a, im.s.next.error.v) else {
         return Slice::Failed;
     };
     if search.connecting.is_some() {
         search.connecting = Some(i as u8);
     }
-    if gap(robot, &s.q[..n], &goal[..n]) <= edge_s {
+    if gap(robot, &im.s.q[..n], &goal[..n]) <= edge_s {
         search.found(i);
     }
     Slice::Working
@@ -449,13 +445,11 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
 /// position `from` to `to`, at the spacing of an edge's checks.
 fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
-    scenario: &Scenario<N, M, W>,
-    target: &Target,
-    s: &mut Scratch<'_, N>,
+    im: &mut Imagination<'_, '_, N, M, W>,
     spent: &mut u16,
 ) -> Slice {
-    let (settings, robot) = (scenario.settings(), scenario.robot());
-    let n = robot.len().min(N);
+    let scenario = im.scenario;
+    let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
     let spacing = EDGE_STEPS * settings.time_step_s / EDGE_CHECKS as f32;
     let len = search.path_len as usize;
     let (from, to) = (search.from as usize, search.to as usize);
@@ -478,10 +472,10 @@ fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
         search.shortcut_checks += 1;
         let t = k as f32 / checks.max(1) as f32;
         for j in 0..n {
-            s.q[j] = a[j] + t * (b[j] - a[j]);
+            im.s.q[j] = a[j] + t * (b[j] - a[j]);
         }
         *spent += 1;
-        let clear = imagine_accept(scenario, target, f32::INFINITY, s);
+        let clear = im.accept(f32::INFINITY);
         if !clear {
             search.to -= 1;
             search.check = 1;
@@ -506,79 +500,87 @@ fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
     Slice::Working
 }
 
-/// One law step in imagination from `qa` (evaluated into `s.next`): the
-/// damped law's step of at most `edge_s` at the rate limits, through the
-/// one law interface, cut by conservative advancement, into `s.q`. Returns
-/// the step (seconds), 0 when none can be taken.
-fn imagine_law_step<const N: usize, const M: usize, const W: usize>(
-    scenario: &Scenario<N, M, W>,
-    qa: &[f32],
-    edge_s: f32,
-    s: &mut Scratch<'_, N>,
-) -> f32 {
-    let (settings, robot) = (scenario.settings(), scenario.robot());
-    let n = robot.len().min(N).min(qa.len());
-    // The search's descents are the damped law's only: under a first-order
-    // law no imagined step is taken (and no goal found).
-    if settings.law.kind != LawKind::DampedLeastSquares {
-        return 0.0;
-    }
-    let input = LawInput {
-        step: StepRule {
-            time_step_s: edge_s,
-            ..settings.step_rule()
-        },
-        ..s.next.law_input(scenario, &qa[..n], 0.0)
-    };
-    propose(&input, DriveGoal::Pose, s.law, &mut s.rate[..n]);
-    imagine_move(scenario, qa, edge_s, s)
+/// One slice's world: the model, the target aimed at and the planner's
+/// scratch buffers the search imagines in.
+struct Imagination<'a, 'b, const N: usize, const M: usize, const W: usize> {
+    scenario: &'a Scenario<N, M, W>,
+    target: &'a Target,
+    s: &'a mut Scratch<'b, N>,
 }
 
-/// `s.q = qa + h rate`, `h <= edge_s` cut by conservative advancement from
-/// `qa` (evaluated into `s.next`); returns `h`.
-fn imagine_move<const N: usize, const M: usize, const W: usize>(
-    scenario: &Scenario<N, M, W>,
-    qa: &[f32],
-    edge_s: f32,
-    s: &mut Scratch<'_, N>,
-) -> f32 {
-    let (settings, robot) = (scenario.settings(), scenario.robot());
-    let n = robot.len().min(N).min(qa.len());
-    if !all_finite(&s.rate[..n]) {
-        return 0.0;
+impl<const N: usize, const M: usize, const W: usize> Imagination<'_, '_, N, M, W> {
+    /// The robot's joints (at most `N`).
+    fn n(&self) -> usize {
+        self.scenario.robot().len().min(N)
     }
-    let h = advancement(
-        robot,
-        &s.next.frames,
-        &s.next.distance_sq[..n],
-        s.next.field.nearest.as_ref(),
-        &s.rate[..n],
-        edge_s,
-        settings.avoidance.advance_fraction,
-    );
-    if h.is_nan() || h <= 0.0 {
-        return 0.0;
-    }
-    let moves = qa.iter().zip(s.rate.iter()).zip(robot.joints()).take(n);
-    for (next, ((&a, &r), joint)) in s.q.iter_mut().zip(moves) {
-        *next = joint.clamp(a + h * r);
-    }
-    h
-}
 
-/// Evaluates `s.q` into `s.next`: whether a step could be accepted there,
-/// coming from a configuration of clearance `c_from` (clear, and above the
-/// contact floor or no closer).
-fn imagine_accept<const N: usize, const M: usize, const W: usize>(
-    scenario: &Scenario<N, M, W>,
-    target: &Target,
-    c_from: f32,
-    s: &mut Scratch<'_, N>,
-) -> bool {
-    let n = scenario.robot().len().min(N);
-    s.next.evaluate(scenario, &s.q[..n], target);
-    let floor = CONTACT_FLOOR * scenario.settings().avoidance.engage_clearance;
-    s.next.safe_after(c_from, floor) && all_finite(&s.q[..n])
+    /// One law step in imagination from `qa` (evaluated into `s.next`): the
+    /// damped law's step of at most `edge_s` at the rate limits, through the
+    /// one law interface, cut by conservative advancement, into `s.q`.
+    /// Returns the step (seconds), 0 when none can be taken.
+    fn law_step(&mut self, qa: &[f32], edge_s: f32) -> f32 {
+        let settings = self.scenario.settings();
+        let n = self.n().min(qa.len());
+        // The search's descents are the damped law's only: under a
+        // first-order law no imagined step is taken (and no goal found).
+        if settings.law.kind != LawKind::DampedLeastSquares {
+            return 0.0;
+        }
+        let s = &mut *self.s;
+        let input = LawInput {
+            step: StepRule {
+                time_step_s: edge_s,
+                ..settings.step_rule()
+            },
+            ..s.next.law_input(self.scenario, &qa[..n], 0.0)
+        };
+        propose(&input, DriveGoal::Pose, s.law, &mut s.rate[..n]);
+        self.advance(qa, edge_s)
+    }
+
+    /// `s.q = qa + h rate`, `h <= edge_s` cut by conservative advancement
+    /// from `qa` (evaluated into `s.next`); returns `h`.
+    fn advance(&mut self, qa: &[f32], edge_s: f32) -> f32 {
+        let (settings, robot) = (self.scenario.settings(), self.scenario.robot());
+        let n = self.n().min(qa.len());
+        let s = &mut *self.s;
+        if !all_finite(&s.rate[..n]) {
+            return 0.0;
+        }
+        let h = advancement(
+            robot,
+            &s.next.frames,
+            &s.next.distance_sq[..n],
+            s.next.field.nearest.as_ref(),
+            &s.rate[..n],
+            edge_s,
+            settings.avoidance.advance_fraction,
+        );
+        if h.is_nan() || h <= 0.0 {
+            return 0.0;
+        }
+        let moves = qa.iter().zip(s.rate.iter()).zip(robot.joints()).take(n);
+        for (next, ((&a, &r), joint)) in s.q.iter_mut().zip(moves) {
+            *next = joint.clamp(a + h * r);
+        }
+        h
+    }
+
+    /// Evaluates `q` into `s.next`, against the target.
+    fn evaluate(&mut self, q: &[f32]) {
+        self.s.next.evaluate(self.scenario, q, self.target);
+    }
+
+    /// Evaluates `s.q` into `s.next`: whether a step could be accepted
+    /// there, coming from a configuration of clearance `c_from` (clear, and
+    /// above the contact floor or no closer).
+    fn accept(&mut self, c_from: f32) -> bool {
+        let n = self.n();
+        let s = &mut *self.s;
+        s.next.evaluate(self.scenario, &s.q[..n], self.target);
+        let floor = CONTACT_FLOOR * self.scenario.settings().avoidance.engage_clearance;
+        s.next.safe_after(c_from, floor) && all_finite(&s.q[..n])
+    }
 }
 
 #[cfg(test)]
