@@ -79,6 +79,12 @@ enum Command {
         #[arg(long, default_value_t = 20.0)]
         idle_timeout: f64,
     },
+    /// Print the link capsules and the pairs of links checked for
+    /// self-collision, and why each other pair is skipped.
+    Acm {
+        /// Scenario file: `*.toml`, anything else is read as input.dat.
+        scenario: PathBuf,
+    },
     /// Draw the pictures of an output folder (SVG and PNG views and plots, 3-D viewer.html, motion.gif).
     Render {
         /// Output folder of `capp run`.
@@ -160,6 +166,7 @@ where
             Duration::from_secs_f64(idle_timeout.clamp(0.1, 86_400.0)),
         ),
         Command::Render { dir, scenario } => render_cmd(&dir, scenario.as_deref()),
+        Command::Acm { scenario } => acm_cmd(&scenario),
     };
     match result {
         Ok(code) => code,
@@ -337,6 +344,12 @@ fn check_cmd(path: &Path, scenario: Option<&Path>) -> Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
+}
+
+fn acm_cmd(path: &Path) -> Result<ExitCode> {
+    let problem = Problem::load(path)?;
+    say(&crate::acm::report(&problem)?);
+    Ok(ExitCode::SUCCESS)
 }
 
 fn render_cmd(dir: &Path, scenario: Option<&Path>) -> Result<ExitCode> {

@@ -28,6 +28,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod acm;
 pub mod check;
 pub mod cli;
 pub mod escapes;

@@ -14,6 +14,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use capp_core::self_collision::pairs::{PairTable, SAMPLES};
 use capp_core::{
     Joint, Mission, MissionError, Planner, Robot, Scenario, ScenarioError, SetpointFilter,
     Settings, StartError, SuperEllipsoid, Waypoint,
@@ -90,7 +91,26 @@ pub struct Lines {
     pub settings: Option<usize>,
     /// The start configuration.
     pub start: Option<usize>,
+    /// Per `[[robot.allow]]` entry.
+    pub allow: Vec<Option<usize>>,
 }
+
+/// The links' capsules and the pairs allowed to touch, as the file gives
+/// them (the core checks them: [`capp_core::self_collision`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinkGeometry {
+    /// Whether self-collision is checked at all (`[robot] self_collision`).
+    pub enabled: bool,
+    /// Capsule radius per link, length units.
+    pub radius: Vec<f32>,
+    /// Pairs of links (0-based) allowed to touch: the preset's and `[[robot.allow]]`'s.
+    pub allowed: Vec<(usize, usize)>,
+    /// The home configuration, for the pairs in contact there.
+    pub home: Vec<f32>,
+}
+
+/// Seed of the sampled configurations of the allowed-collision matrix.
+pub const PAIR_SEED: u32 = 1;
 
 /// A planning problem in the core's units (radians, the file's length unit, seconds).
 #[derive(Clone, Debug, PartialEq)]
@@ -125,6 +145,8 @@ pub struct Problem {
     /// per joint, radians or length units). Their entry in `waypoints` is a
     /// placeholder the core replaces by the configuration's pose.
     pub joint_goals: Vec<(usize, Vec<f32>)>,
+    /// The links' capsules and allowed pairs.
+    pub links: LinkGeometry,
     /// Where each item is in the file.
     pub lines: Lines,
 }
@@ -175,7 +197,7 @@ impl Problem {
                     .get(waypoint as usize)
                     .copied()
                     .flatten(),
-                ScenarioError::Mission(_) => None,
+                ScenarioError::Mission(_) | ScenarioError::Capsules(_) => None,
             };
             let mut message = e.to_string();
             if let ScenarioError::Obstacle(o) = e {
@@ -206,7 +228,54 @@ impl Problem {
                 )
             })?;
         }
+        if self.links.enabled {
+            let table = self.pair_table()?;
+            scenario
+                .set_link_capsules(&self.links.radius, table.checked_rows())
+                .map_err(|e| self.capsule_error(e))?;
+        }
         Ok(scenario)
+    }
+
+    /// Which pairs of links are checked and why the others are skipped
+    /// ([`capp_core::self_collision::pairs`]).
+    pub fn pair_table(&self) -> Result<PairTable<MAX_JOINTS>, LoadError> {
+        let robot = Robot::<MAX_JOINTS>::new(&self.joints)
+            .map_err(|e| self.error(self.lines.robot, format!("robot: {e}")))?;
+        let allowed: Vec<(u8, u8)> = self
+            .links
+            .allowed
+            .iter()
+            .map(|&(a, b)| (a.min(255) as u8, b.min(255) as u8))
+            .collect();
+        PairTable::new(
+            &robot,
+            &self.links.radius,
+            &allowed,
+            &self.links.home,
+            SAMPLES,
+            PAIR_SEED,
+        )
+        .map_err(|e| self.capsule_error(ScenarioError::Capsules(e)))
+    }
+
+    fn capsule_error(&self, e: ScenarioError) -> LoadError {
+        let line = match e {
+            ScenarioError::Capsules(capp_core::self_collision::CapsuleError::BadRadius {
+                link,
+            }) => self.lines.joints.get(link as usize).copied().flatten(),
+            _ => None,
+        }
+        .or(self.lines.robot);
+        self.error(line, e.to_string())
+    }
+
+    /// `link 3 ("name")` for messages: DH link `k + 1`, after joint `k + 1`.
+    pub fn link_label(&self, k: usize) -> String {
+        match self.joint_names.get(k).filter(|n| !n.is_empty()) {
+            Some(name) => format!("link {} (after joint \"{name}\")", k + 1),
+            None => format!("link {}", k + 1),
+        }
     }
 
     /// Runs every check of the core (robot, obstacles, mission, start
@@ -236,6 +305,11 @@ impl Problem {
                     self.obstacle_label(obstacle as usize),
                     self.describe_point(point),
                     if self.point_is_joint(point) { "joint" } else { "link" },
+                ),
+                StartError::SelfCollision { links: [a, b] } => format!(
+                    "start configuration puts {} into {} (self-collision: their capsules touch)",
+                    self.link_label(a as usize),
+                    self.link_label(b as usize),
                 ),
                 other => format!("start configuration: {other}"),
             };

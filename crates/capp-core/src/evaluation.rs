@@ -8,6 +8,8 @@ use crate::control::joint_space::joint_v;
 use crate::control::LawInput;
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::scenario::Scenario;
+use crate::self_collision::field::{link_pairs, SelfField};
+use crate::self_collision::INFLUENCE;
 use crate::target::{pose_error, PoseError, Target};
 
 /// The error from `target` of the arm at `q` (frames `frames`): the pose
@@ -35,11 +37,15 @@ pub struct Evaluation<const N: usize> {
     pub error: PoseError,
     /// The obstacle gradient `mu = dP/dq` (eq. 20).
     pub mu: [f32; N],
-    /// Per link, the square of a lower bound on its points' distance to any
-    /// inflated obstacle.
+    /// Per link, the square of its room for one step (length units
+    /// squared): a lower bound on its points' distance to any inflated
+    /// obstacle, and at most its share of the gap to every checked link
+    /// ([`crate::self_collision::field`]).
     pub distance_sq: [f32; N],
     /// What the obstacles say (eq. 26's potential, the closest pair, ...).
     pub field: ObstacleField,
+    /// What the checked link pairs say (their potential, the closest pair).
+    pub links: SelfField,
 }
 
 impl<const N: usize> Default for Evaluation<N> {
@@ -57,6 +63,7 @@ impl<const N: usize> Evaluation<N> {
             mu: [0.0; N],
             distance_sq: [0.0; N],
             field: ObstacleField::default(),
+            links: SelfField::default(),
         }
     }
 
@@ -69,12 +76,14 @@ impl<const N: usize> Evaluation<N> {
             mu,
             distance_sq,
             field,
+            links,
         } = self;
         *frames = Frames::default();
         *error = PoseError::default();
         mu.fill(0.0);
         distance_sq.fill(0.0);
         *field = ObstacleField::default();
+        *links = SelfField::default();
     }
 
     /// What a law reads of this evaluation, for the arm at `q` (the
@@ -95,7 +104,7 @@ impl<const N: usize> Evaluation<N> {
             q,
             error: &self.error,
             mu: &self.mu[..n],
-            clearance: self.field.clearance.map(|c| c.value),
+            clearance: self.clearance(),
             law: &settings.law,
             engage_clearance: settings.avoidance.engage_clearance,
             step: settings.step_rule(),
@@ -103,9 +112,28 @@ impl<const N: usize> Evaluation<N> {
         }
     }
 
-    /// `C - 1` of the closest pair within influence (infinity: none).
+    /// The closest pair's clearance within influence, an obstacle's `C - 1`
+    /// or a link pair's `gap / (r_a + r_b)`, whichever is less (`None`: no
+    /// pair within influence).
+    pub fn clearance(&self) -> Option<f32> {
+        match (self.field.clearance.map(|c| c.value), self.links.closest) {
+            (Some(o), Some(l)) if l.clearance < INFLUENCE => Some(crate::math::min(o, l.clearance)),
+            (o, Some(l)) if l.clearance < INFLUENCE => {
+                Some(o.map_or(l.clearance, |o| crate::math::min(o, l.clearance)))
+            }
+            (o, _) => o,
+        }
+    }
+
+    /// The closest pair's clearance ([`Evaluation::clearance`]; infinity: none).
     pub fn closest(&self) -> f32 {
-        self.field.clearance.map_or(f32::INFINITY, |c| c.value)
+        self.clearance().unwrap_or(f32::INFINITY)
+    }
+
+    /// Whether every avoidance point is outside every inflated obstacle and
+    /// no two checked link capsules touch.
+    pub fn clear(&self) -> bool {
+        self.field.clear && self.links.clear
     }
 
     /// Whether a step may end here, coming from a configuration whose
@@ -113,7 +141,7 @@ impl<const N: usize> Evaluation<N> {
     /// a surface (below `floor` the closest clearance may not shrink).
     pub fn safe_after(&self, c_from: f32, floor: f32) -> bool {
         let c = self.closest();
-        self.field.clear && (c >= floor || c >= c_from)
+        self.clear() && (c >= floor || c >= c_from)
     }
 
     /// Evaluates the arm of `scenario` at `q` against `target`: forward
@@ -136,6 +164,29 @@ impl<const N: usize> Evaluation<N> {
             &mut self.mu,
             &mut self.distance_sq,
         );
+        let capsules = scenario.capsules();
+        if capsules.is_on() {
+            let n = robot.len().min(N);
+            self.links = link_pairs(
+                robot,
+                &self.frames,
+                capsules,
+                &mut self.mu[..n],
+                &mut self.distance_sq[..n],
+                self.field.nearest.map(|h| h.link),
+            );
+            // The link of the nearest obstacle pair slides along its
+            // half-space; its other room must hold its link pairs too.
+            if let Some(h) = self.field.nearest.as_mut() {
+                h.others_sq = crate::math::min(h.others_sq, self.links.pressed_room_sq);
+            }
+        } else {
+            self.links = SelfField {
+                clear: true,
+                pressed_room_sq: f32::INFINITY,
+                ..SelfField::default()
+            };
+        }
     }
 }
 

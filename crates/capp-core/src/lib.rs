@@ -70,6 +70,7 @@ pub mod planner;
 pub mod projection;
 pub mod robot;
 pub mod scenario;
+pub mod self_collision;
 pub mod setpoint;
 pub mod settings_field;
 pub mod step_size;

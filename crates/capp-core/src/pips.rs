@@ -141,6 +141,24 @@ pub fn home() -> [f32; JOINTS] {
     })
 }
 
+/// Capsule radius of every link, inches: the chords keep at least 3 in
+/// apart. The PIPS geometry: the truss tubes, the pedestal and its
+/// telescopes within 1.5 in of their chords.
+pub const LINK_RADIUS: f32 = 1.5;
+
+/// Links of the pedestal (DH links 1-5: the yaw and pitch joints and the
+/// three telescoping sections), one rigid group: its parts slide inside
+/// one another and are never checked against each other.
+pub const PEDESTAL_LINKS: usize = 5;
+
+/// The pairs of links the PIPS geometry allows to touch (0-based): every
+/// pair within the pedestal. The knuckles (the short offsets, under 3 in,
+/// inside each truss knuckle and the wrist) are found from the chain
+/// itself ([`crate::self_collision::pairs`]).
+pub fn allowed_pairs() -> impl Iterator<Item = (u8, u8)> {
+    (0..PEDESTAL_LINKS as u8).flat_map(|a| (a + 1..PEDESTAL_LINKS as u8).map(move |b| (a, b)))
+}
+
 /// PIPS as a validated robot. `N` must be at least 18.
 pub fn robot<const N: usize>() -> Result<Robot<N>, RobotError> {
     Robot::new(&joints())

@@ -6,6 +6,7 @@ use crate::math::{is_rotation, vec3, Mat3};
 use crate::mission::{JointGoalProblem, Mission, MissionError, Settings, Waypoint};
 use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
 use crate::robot::{Joint, Robot, RobotError};
+use crate::self_collision::{CapsuleError, LinkCapsules};
 use crate::target::Target;
 
 /// Most waypoints of a scenario that are joint configurations.
@@ -24,6 +25,8 @@ pub enum ScenarioError {
     Obstacle(ObstacleError),
     /// The waypoints or settings.
     Mission(MissionError),
+    /// The link capsules or the checked pairs.
+    Capsules(CapsuleError),
 }
 
 impl From<RobotError> for ScenarioError {
@@ -34,6 +37,11 @@ impl From<RobotError> for ScenarioError {
 impl From<ObstacleError> for ScenarioError {
     fn from(e: ObstacleError) -> Self {
         ScenarioError::Obstacle(e)
+    }
+}
+impl From<CapsuleError> for ScenarioError {
+    fn from(e: CapsuleError) -> Self {
+        ScenarioError::Capsules(e)
     }
 }
 impl From<MissionError> for ScenarioError {
@@ -48,6 +56,7 @@ impl core::fmt::Display for ScenarioError {
             ScenarioError::Robot(e) => write!(f, "robot: {e}"),
             ScenarioError::Obstacle(e) => write!(f, "{e}"),
             ScenarioError::Mission(e) => write!(f, "{e}"),
+            ScenarioError::Capsules(e) => write!(f, "robot: {e}"),
         }
     }
 }
@@ -61,6 +70,8 @@ pub struct Scenario<const N: usize, const M: usize, const W: usize> {
     /// Joint configurations some targets are ([`Scenario::set_joint_goal`]).
     joint_goals: heapless::Vec<[f32; N], MAX_JOINT_GOALS>,
     settings: Settings,
+    /// The links' capsules and the pairs checked ([`Scenario::set_link_capsules`]).
+    capsules: LinkCapsules<N>,
 }
 
 impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
@@ -86,6 +97,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             targets: heapless::Vec::new(),
             joint_goals: heapless::Vec::new(),
             settings: Settings::default(),
+            capsules: LinkCapsules::none(),
         }
     }
 
@@ -139,7 +151,9 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             targets,
             joint_goals,
             settings: kept_settings,
+            capsules,
         } = self;
+        *capsules = LinkCapsules::none();
         validated.clear();
         targets.clear();
         joint_goals.clear();
@@ -257,6 +271,28 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             };
         }
         Ok(())
+    }
+
+    /// Gives the links capsules of `radius` (one per link, length units)
+    /// and checks the pairs of `checked` (row `a`: bit `b > a` per checked
+    /// pair; [`crate::self_collision::pairs::PairTable::checked_rows`]):
+    /// from then on no step brings two checked capsules into contact
+    /// ([`crate::self_collision`]). Without it a scenario has no
+    /// self-collision checks. On error the scenario keeps none.
+    pub fn set_link_capsules(
+        &mut self,
+        radius: &[f32],
+        checked: &[u64],
+    ) -> Result<(), ScenarioError> {
+        self.capsules = LinkCapsules::none();
+        self.capsules = LinkCapsules::new(&self.robot, radius, checked)?;
+        Ok(())
+    }
+
+    /// The links' capsules and checked pairs (none unless
+    /// [`Scenario::set_link_capsules`] gave them).
+    pub fn capsules(&self) -> &LinkCapsules<N> {
+        &self.capsules
     }
 
     /// The targets the planner drives to, one per waypoint.

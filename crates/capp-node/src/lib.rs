@@ -783,6 +783,14 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
             };
             (ErrorCode::InvalidMission, index)
         }
+        ScenarioError::Capsules(e) => {
+            use capp_core::self_collision::CapsuleError as C;
+            let index = match e {
+                C::BadRadius { link } | C::BadPair { link } => link,
+                C::WrongLength { .. } | C::TooManyLinks { .. } => NO_INDEX,
+            };
+            (ErrorCode::InvalidRobot, index)
+        }
     }
 }
 

@@ -279,6 +279,27 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let listing_home = start.clone();
+    // The listing's robot is PIPS: then its capsules and pedestal group
+    // are the preset's; any other DH table gets half the link margin.
+    let is_pips = joints.len() == capp_core::pips::JOINTS
+        && joints.iter().zip(capp_core::pips::joints()).all(|(a, b)| {
+            a.kind == b.kind
+                && (a.alpha - b.alpha).abs() < 1e-3
+                && (a.a - b.a).abs() < 1e-3
+                && (a.d - b.d).abs() < 1e-3
+                && (a.theta - b.theta).abs() < 1e-3
+        });
+    let (radius, allowed) = if is_pips {
+        (
+            capp_core::pips::LINK_RADIUS,
+            capp_core::pips::allowed_pairs()
+                .map(|(a, b)| (a as usize, b as usize))
+                .collect(),
+        )
+    } else {
+        (0.5 * settings.avoidance.link_margin, Vec::new())
+    };
     Ok(Problem {
         joint_goals: Vec::new(),
         name,
@@ -294,6 +315,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         settings,
         start,
         setpoints: SetpointFilter::LISTING,
+        // Pairs in contact at the listing's start are skipped.
+        links: crate::problem::LinkGeometry {
+            enabled: true,
+            radius: vec![radius; n],
+            allowed,
+            home: listing_home,
+        },
         lines: Lines {
             robot: Some(n_line),
             joints: joint_lines,
@@ -302,6 +330,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             orientations: orientation_lines,
             settings: Some(s_line),
             start: Some(n_line + 1),
+            allow: Vec::new(),
         },
     })
 }

@@ -75,6 +75,28 @@ struct RobotSpec {
     joints: Option<Vec<Spanned<JointSpec>>>,
     #[serde(default)]
     overrides: Vec<Spanned<OverrideSpec>>,
+    /// Capsule radius of every link without its own `radius`, length units.
+    link_radius: Option<f64>,
+    /// Whether link pairs are kept apart (default true).
+    self_collision: Option<bool>,
+    /// More pairs of links allowed to touch.
+    #[serde(default)]
+    allow: Vec<Spanned<AllowSpec>>,
+}
+
+/// `[[robot.allow]] links = [a, b]`: two links, by DH number (1 to n, link
+/// `k` after joint `k`) or by the name of the joint before them.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AllowSpec {
+    links: [LinkRef; 2],
+}
+
+#[derive(Deserialize, Clone)]
+#[serde(untagged)]
+enum LinkRef {
+    Number(i64),
+    Name(String),
 }
 
 #[derive(Deserialize)]
@@ -102,6 +124,8 @@ struct JointSpec {
     max_rate: f64,
     #[serde(default = "one")]
     weight: f64,
+    /// Capsule radius of the link after this joint, length units.
+    radius: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -116,6 +140,7 @@ struct OverrideSpec {
     max: Option<f64>,
     max_rate: Option<f64>,
     weight: Option<f64>,
+    radius: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -240,6 +265,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         .position(|l| l.trim_start().starts_with("[robot") || l.trim_start().starts_with("robot"))
         .map_or(1, |i| i + 1);
     let robot = file.robot;
+    let preset_pips = robot.preset.is_some();
+    let mut radii: Vec<Option<f32>> = Vec::new();
     let (mut joints, mut names, mut joint_lines, mut home) = match (&robot.preset, robot.joints) {
         (Some(_), Some(_)) => {
             return Err(err(
@@ -275,6 +302,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 .collect();
             let names = (1..=joints.len()).map(|i| format!("pips{i}")).collect();
             let lines = vec![Some(robot_line); joints.len()];
+            radii = vec![None; joints.len()];
             (joints, names, lines, home)
         }
         (None, Some(specs)) => {
@@ -288,6 +316,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             for spec in specs {
                 let line = at(spec.span());
                 let s = spec.into_inner();
+                radii.push(s.radius.map(|r| r as f32));
                 let (joint, q0) = match s.kind {
                     JointType::Revolute => (
                         Joint {
@@ -356,11 +385,63 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         if let Some(v) = o.weight {
             j.weight = v as f32;
         }
+        if let Some(v) = o.radius {
+            radii[o.joint - 1] = Some(v as f32);
+        }
         joint_lines[o.joint - 1] = Some(line);
     }
     if names.iter().all(|n| n.is_empty()) {
         names.clear();
     }
+
+    // Pairs of links allowed to touch, by number or joint name.
+    let mut allowed: Vec<(usize, usize)> = if preset_pips {
+        pips::allowed_pairs()
+            .map(|(a, b)| (a as usize, b as usize))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut allow_lines = Vec::new();
+    for spec in robot.allow {
+        let line = at(spec.span());
+        let mut pair = [0usize; 2];
+        for (k, link) in spec.into_inner().links.iter().enumerate() {
+            pair[k] = match link {
+                LinkRef::Number(i) if *i >= 1 && (*i as usize) <= joints.len() => *i as usize - 1,
+                LinkRef::Number(i) => {
+                    return Err(err(
+                        line,
+                        format!(
+                            "robot.allow: link {i} does not exist (links are numbered 1 to {})",
+                            joints.len()
+                        ),
+                    ))
+                }
+                LinkRef::Name(name) => match names.iter().position(|n| n == name) {
+                    Some(j) => j,
+                    None => {
+                        return Err(err(
+                            line,
+                            format!("robot.allow: unknown link \"{name}\" (name a link by its number or by the joint before it)"),
+                        ))
+                    }
+                },
+            };
+        }
+        if pair[0] == pair[1] {
+            return Err(err(
+                line,
+                format!(
+                    "robot.allow: a link cannot be paired with itself (link {})",
+                    pair[0] + 1
+                ),
+            ));
+        }
+        allowed.push((pair[0], pair[1]));
+        allow_lines.push(Some(line));
+    }
+    let link_home = home.clone();
 
     // Start configuration.
     let (start, start_line) = match file.start {
@@ -596,6 +677,26 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         settings.escape.searches = v;
     }
 
+    // Link capsules: a joint's own `radius`, else `[robot] link_radius`,
+    // else the preset's, else half the link margin (PIPS: 1.5 in).
+    let default_radius = match robot.link_radius {
+        Some(r) => r as f32,
+        None if preset_pips => pips::LINK_RADIUS * per_inch as f32,
+        None => 0.5 * settings.avoidance.link_margin,
+    };
+    if !(default_radius.is_finite() && default_radius > 0.0) {
+        return Err(err(
+            robot_line,
+            "robot.link_radius must be positive and finite".into(),
+        ));
+    }
+    let links = crate::problem::LinkGeometry {
+        enabled: robot.self_collision.unwrap_or(true),
+        radius: radii.iter().map(|r| r.unwrap_or(default_radius)).collect(),
+        allowed,
+        home: link_home,
+    };
+
     let setpoints = match file.output.and_then(|o| o.setpoints) {
         None => SetpointFilter::LISTING,
         Some(SetpointSpec::Named(n)) if n == "listing" => SetpointFilter::LISTING,
@@ -649,6 +750,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         settings,
         start,
         setpoints,
+        links,
         lines: crate::problem::Lines {
             robot: Some(robot_line),
             joints: joint_lines,
@@ -657,6 +759,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             orientations: Vec::new(),
             settings: settings_line,
             start: start_line,
+            allow: allow_lines,
         },
     })
 }

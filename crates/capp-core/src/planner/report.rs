@@ -59,6 +59,11 @@ pub enum StartError {
         /// Obstacle index.
         obstacle: u8,
     },
+    /// Two checked link capsules start in contact (self-collision).
+    SelfCollision {
+        /// The two links (0-based, the lower first).
+        links: [u8; 2],
+    },
     /// The scenario has no waypoint ([`crate::Scenario::new`] refuses
     /// such a mission, so a validated scenario never gives this).
     ScenarioMismatch,
@@ -87,6 +92,12 @@ impl core::fmt::Display for StartError {
                 f,
                 "start configuration puts avoidance point {point} inside obstacle {}",
                 obstacle as u32 + 1
+            ),
+            StartError::SelfCollision { links: [a, b] } => write!(
+                f,
+                "start configuration puts link {} into link {} (self-collision)",
+                a as u32 + 1,
+                b as u32 + 1
             ),
             StartError::ScenarioMismatch => {
                 write!(f, "the scenario has no waypoint")

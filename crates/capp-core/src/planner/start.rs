@@ -57,6 +57,10 @@ impl<const N: usize> Planner<N> {
         self.evals
             .now_mut()
             .evaluate(scenario, &self.q[..n], &target);
+        if !self.evals.now().links.clear {
+            let links = self.evals.now().links.closest.map_or([0, 0], |p| p.links);
+            return Err(StartError::SelfCollision { links });
+        }
         if !self.evals.now().field.clear {
             let c = self.evals.now().field.clearance.unwrap_or(Clearance {
                 value: 0.0,

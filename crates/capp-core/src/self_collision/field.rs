@@ -1,0 +1,324 @@
+//! What the checked link pairs add to one configuration's obstacle field:
+//! a potential term per close pair with its exact joint-space gradient, the
+//! closest pair, and each link's room for conservative advancement.
+//!
+//! For a pair of links `a`, `b` with closest chord points `p_a` (fraction
+//! `s` along link `a`) and `p_b` (fraction `t`), `d = |p_a - p_b|`, the gap
+//! `g = d - r_a - r_b` and the clearance `c = g / l`, `l = r_a + r_b`:
+//!
+//! ```text
+//! P_ab = 1 / c                                    (eq. 26's shape, c for C - 1)
+//! dP_ab/dq = -1 / (c^2 l) n . (J_{p_a} - J_{p_b}),   n = (p_a - p_b) / d
+//! ```
+//!
+//! (the closest points move with their links; to first order the distance
+//! changes only along `n`). So the pair is two point forces, `f_a = -n / (c^2
+//! l)` at `p_a` and `f_b = -f_a` at `p_b`, and `mu += sum J^T f` is the same
+//! backward sweep as the obstacles' ([`crate::avoidance`]): each link keeps
+//! the sum of its forces `F` and of `t f` (`S`), whose moment about its
+//! pivot is `(o_end - o_pivot) x S`. O(n + pairs), no finite differences.
+//!
+//! Conservative advancement: a pair is safe for a step when the two links'
+//! travel bounds add up to at most `fraction` of its gap. Each link gets
+//! half the gap of each close pair, and `INFLUENCE r_k` against the pairs
+//! the broad phase found farther than `INFLUENCE (r_a + r_b)`: any two
+//! links' shares then add up to at most their gap. The shares go into the
+//! same per-link room the obstacles use ([`crate::step_size::advancement`]).
+
+use super::segment::closest_points;
+use super::{LinkCapsules, INFLUENCE};
+use crate::kinematics::Frames;
+use crate::math::{max, min, Vec3};
+use crate::robot::{JointKind, Robot};
+
+/// The closest checked pair of links.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkPair {
+    /// `c = gap / (r_a + r_b)`: > 0 apart, dimensionless (as `C - 1`).
+    pub clearance: f32,
+    /// The capsules' distance (chords' distance less both radii), length
+    /// units; negative when they overlap.
+    pub gap: f32,
+    /// The two links (0-based, the lower first).
+    pub links: [u8; 2],
+}
+
+/// What the link pairs say about one configuration.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SelfField {
+    /// The pairs' part of the potential: `sum 1 / c` over the pairs within
+    /// [`INFLUENCE`].
+    pub potential: f32,
+    /// The closest pair the narrow phase tested, if any.
+    pub closest: Option<LinkPair>,
+    /// Pairs within influence.
+    pub active_pairs: u16,
+    /// Whether no two checked capsules overlap.
+    pub clear: bool,
+    /// The square of the room of link `pressed` against its link pairs
+    /// alone (length units squared; infinity when it has none): the
+    /// obstacles' nearest link slides along its half-space and checks
+    /// everything else against this ([`crate::avoidance::HalfSpace`]).
+    pub pressed_room_sq: f32,
+}
+
+/// Evaluates the checked pairs of `capsules` at `frames`: adds the pairs'
+/// gradient to `mu` (`frames.len()` values) and lowers each link's
+/// `room_sq` (length units squared) to its share of its pairs' gaps; the
+/// share of link `pressed` alone is [`SelfField::pressed_room_sq`].
+pub fn link_pairs<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    capsules: &LinkCapsules<N>,
+    mu: &mut [f32],
+    room_sq: &mut [f32],
+    pressed: Option<u8>,
+) -> SelfField {
+    let mut field = SelfField {
+        clear: true,
+        pressed_room_sq: f32::INFINITY,
+        ..SelfField::default()
+    };
+    let pressed = pressed.map_or(usize::MAX, |k| k as usize);
+    let n = capsules
+        .n
+        .min(frames.len())
+        .min(mu.len())
+        .min(room_sq.len());
+    if n == 0 {
+        return field;
+    }
+    let mut mid = [Vec3::zeros(); N];
+    for (k, (m, (room, far))) in mid
+        .iter_mut()
+        .zip(room_sq.iter_mut().zip(&capsules.far_room))
+        .take(n)
+        .enumerate()
+    {
+        *m = (frames.pivot(k) + frames.link_end(k)) * 0.5;
+        *room = min(*room, far * far);
+        if k == pressed {
+            field.pressed_room_sq = far * far;
+        }
+    }
+    // Per link: the sum of the pair forces on it, and of `t f`.
+    let mut force = [Vec3::zeros(); N];
+    let mut sliding = [Vec3::zeros(); N];
+    let mut closest = f32::INFINITY;
+    for a in 0..n {
+        let mut row = capsules.checked[a];
+        let (m_a, reach_a, r_a) = (mid[a], capsules.reach[a], capsules.radius[a]);
+        while row != 0 {
+            let b = row.trailing_zeros() as usize;
+            row &= row - 1;
+            let (Some(m_b), Some(&reach_b), Some(&r_b)) =
+                (mid.get(b), capsules.reach.get(b), capsules.radius.get(b))
+            else {
+                continue;
+            };
+            // Broad phase: spheres round both capsules inflated by INFLUENCE radii.
+            let reach = reach_a + reach_b;
+            if (m_a - m_b).norm_squared() >= reach * reach || b >= n {
+                continue;
+            }
+            let pair = closest_points(
+                &frames.pivot(a),
+                &frames.link_end(a),
+                &frames.pivot(b),
+                &frames.link_end(b),
+            );
+            let distance = libm::sqrtf(pair.distance_sq);
+            let radii = r_a + r_b;
+            let gap = distance - radii;
+            let c = gap / radii;
+            let share = 0.5 * max(gap, 0.0);
+            for k in [a, b] {
+                if let Some(room) = room_sq.get_mut(k) {
+                    *room = min(*room, share * share);
+                }
+                if k == pressed {
+                    field.pressed_room_sq = min(field.pressed_room_sq, share * share);
+                }
+            }
+            if c < closest {
+                closest = c;
+                field.closest = Some(LinkPair {
+                    clearance: c,
+                    gap,
+                    links: [a as u8, b as u8],
+                });
+            }
+            if gap <= 0.0 || distance <= 0.0 {
+                field.clear = false;
+                continue;
+            }
+            if c >= INFLUENCE {
+                continue;
+            }
+            field.active_pairs = field.active_pairs.saturating_add(1);
+            field.potential += 1.0 / c;
+            let f_a = (pair.on_first - pair.on_second) * (-1.0 / (c * c * radii * distance));
+            force[a] += f_a;
+            sliding[a] += f_a * pair.s;
+            if let (Some(fb), Some(sb)) = (force.get_mut(b), sliding.get_mut(b)) {
+                *fb -= f_a;
+                *sb -= f_a * pair.t;
+            }
+        }
+    }
+    if field.active_pairs > 0 {
+        add_gradient(robot, frames, &force[..n], &sliding[..n], &mut mu[..n]);
+    }
+    field
+}
+
+/// `mu += J^T f` for the point forces summed per link (`force`) and
+/// weighted by their fraction along it (`sliding`): the backward sweep of
+/// [`crate::avoidance`].
+fn add_gradient<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    force: &[Vec3],
+    sliding: &[Vec3],
+    mu: &mut [f32],
+) {
+    let mut total = Vec3::zeros();
+    let mut moment = Vec3::zeros();
+    for (j, ((m, f), s)) in mu.iter_mut().zip(force).zip(sliding).enumerate().rev() {
+        let chord = frames.link_end(j) - frames.pivot(j);
+        // Reference from this link's end to its pivot, then its own forces.
+        moment += chord.cross(&total);
+        let beyond = total;
+        moment += chord.cross(s);
+        total += f;
+        let z = frames.axis(j);
+        *m += match robot.joints().get(j).map(|joint| joint.kind) {
+            Some(JointKind::Prismatic) => z.dot(&(beyond + s)),
+            _ => z.dot(&moment),
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::forward_kinematics;
+    use crate::robot::Joint;
+    use crate::self_collision::pairs::PairTable;
+
+    /// A planar-ish snake of `n` revolute joints with alternating axes and
+    /// one prismatic joint, folded so that far links come close.
+    fn snake<const N: usize>() -> Robot<N> {
+        let mut joints = [Joint::revolute(0.0, 1.0, 0.0, -2.5, 2.5, 1.0); 8];
+        for (i, j) in joints.iter_mut().enumerate() {
+            j.alpha = if i % 2 == 0 { 0.3 } else { -0.3 };
+        }
+        joints[3] = Joint::prismatic(0.2, 0.3, 0.1, 0.5, 1.5, 1.0);
+        Robot::new(&joints).unwrap()
+    }
+
+    fn capsules<const N: usize>(robot: &Robot<N>) -> LinkCapsules<N> {
+        let radius = [0.1f32; 8];
+        let table = PairTable::<N>::adjacency(robot, &radius, &[]);
+        LinkCapsules::new(robot, &radius, table.checked_rows()).unwrap()
+    }
+
+    /// The potential's gradient against central differences of the
+    /// potential, on random folded configurations where pairs are active.
+    #[test]
+    fn gradient_matches_finite_differences_of_the_potential() {
+        let robot = snake::<8>();
+        let caps = capsules(&robot);
+        let mut rng = crate::escape::rng::Rng::seeded(3, &[]);
+        let mut frames = Frames::<8>::default();
+        let potential = |q: &[f32], frames: &mut Frames<8>| {
+            forward_kinematics(&robot, q, frames);
+            let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
+            link_pairs(&robot, frames, &caps, &mut mu, &mut room, None)
+        };
+        let mut tested = 0;
+        for _ in 0..400 {
+            let q: [f32; 8] = core::array::from_fn(|i| {
+                let j = robot.joints()[i];
+                0.5 * (j.min + j.max) + 0.5 * (j.max - j.min) * rng.uniform()
+            });
+            forward_kinematics(&robot, &q, &mut frames);
+            let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
+            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None);
+            if field.active_pairs == 0 || !field.clear || field.closest.unwrap().clearance < 0.3 {
+                continue;
+            }
+            tested += 1;
+            for j in 0..8 {
+                let h = 1e-3f32;
+                let (mut up, mut down) = (q, q);
+                up[j] += h;
+                down[j] -= h;
+                let (pu, pd) = (potential(&up, &mut frames), potential(&down, &mut frames));
+                // Skip where a pair enters or leaves the influence band.
+                if pu.active_pairs != field.active_pairs || pd.active_pairs != field.active_pairs {
+                    continue;
+                }
+                let fd = (pu.potential - pd.potential) / (2.0 * h);
+                let scale = 1.0 + fd.abs().max(mu[j].abs());
+                assert!(
+                    (fd - mu[j]).abs() <= 2e-2 * scale,
+                    "joint {j}: exact {} vs differences {fd}",
+                    mu[j]
+                );
+            }
+        }
+        assert!(
+            tested >= 20,
+            "only {tested} configurations had active pairs"
+        );
+    }
+
+    /// The rooms: any two checked links' shares add up to at most their gap
+    /// (from an independent brute-force distance).
+    #[test]
+    fn rooms_of_two_links_never_add_up_to_more_than_their_gap() {
+        let robot = snake::<8>();
+        let caps = capsules(&robot);
+        let mut rng = crate::escape::rng::Rng::seeded(5, &[]);
+        let mut frames = Frames::<8>::default();
+        for _ in 0..300 {
+            let q: [f32; 8] = core::array::from_fn(|i| {
+                let j = robot.joints()[i];
+                0.5 * (j.min + j.max) + 0.5 * (j.max - j.min) * rng.uniform()
+            });
+            forward_kinematics(&robot, &q, &mut frames);
+            let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
+            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None);
+            for a in 0..8 {
+                for b in a + 1..8 {
+                    if !caps.is_checked(a, b) {
+                        continue;
+                    }
+                    // Brute force over both chords.
+                    let mut best = f32::INFINITY;
+                    for i in 0..=200 {
+                        let x = frames.pivot(a)
+                            + (frames.link_end(a) - frames.pivot(a)) * (i as f32 / 200.0);
+                        for k in 0..=200 {
+                            let y = frames.pivot(b)
+                                + (frames.link_end(b) - frames.pivot(b)) * (k as f32 / 200.0);
+                            best = best.min((x - y).norm());
+                        }
+                    }
+                    let gap = best - 0.2;
+                    let shares = libm::sqrtf(room[a]) + libm::sqrtf(room[b]);
+                    assert!(
+                        shares <= gap.max(0.0) + 1e-3,
+                        "links {a} {b}: {shares} > {gap}"
+                    );
+                    if gap < -1e-3 {
+                        assert!(!field.clear);
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,230 @@
+//! Self-collision: the arm's links as capsules, the pairs of links that must
+//! stay apart, and what they add to the obstacle field every step.
+//!
+//! * [`LinkCapsules`]: each link `k` (from its joint's pivot to the next
+//!   pivot, DH link `k + 1`) is the capsule of radius `r_k` round that chord:
+//!   the segment in the link's frame, the radius a setting. Built once per
+//!   scenario ([`crate::Scenario::set_link_capsules`]); a scenario without
+//!   them has no self-collision checks.
+//! * [`pairs`]: which pairs are checked (an allowed-collision matrix, as
+//!   MoveIt's setup assistant builds one): adjacent links, links sharing a
+//!   knuckle, pairs in contact at home or in every sampled configuration,
+//!   and pairs a user allows are skipped; every other pair is checked.
+//! * [`field`]: per evaluation, each checked pair's clearance (the chords'
+//!   distance [`segment`] less both radii): a term of the potential with its
+//!   exact gradient through both links' Jacobian columns, the closest pair,
+//!   and each link's room for conservative advancement. A broad phase (a
+//!   bounding sphere per link) settles most pairs in one comparison.
+//!
+//! The clearance of a pair is dimensionless, as the obstacles' `C - 1` is:
+//! `c = gap / (r_a + r_b)`, so the projection (eq. 24) engages for a link pair
+//! at `c < 2 engage_clearance` as it does for an obstacle, and the potential
+//! term `1 / c` has the shape of eq. 26's `1 / (C - 1)`.
+
+pub mod field;
+pub mod pairs;
+pub mod segment;
+
+use crate::math::max;
+use crate::robot::{JointKind, Robot, MAX_LENGTH};
+
+/// Most links a scenario with self-collision may have (the checked pairs of
+/// a link are one `u64` of bits).
+pub const MAX_LINKS: usize = 64;
+
+/// Link pairs are in the potential (and narrow-phase tested) while their
+/// clearance `c = gap / (r_a + r_b)` is below this; beyond it a pair is at
+/// least this many radius sums apart, which is all conservative advancement
+/// needs to know of it.
+pub const INFLUENCE: f32 = 4.0;
+
+/// Why link capsules were rejected. `link` is 0-based (DH link `link + 1`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CapsuleError {
+    /// A radius or a row of checked pairs per link was not given.
+    WrongLength {
+        /// Values given.
+        given: usize,
+        /// Links of the robot.
+        links: usize,
+    },
+    /// More links than [`MAX_LINKS`].
+    TooManyLinks {
+        /// Links of the robot.
+        links: usize,
+    },
+    /// A radius that is not finite, not positive, or over [`MAX_LENGTH`].
+    BadRadius {
+        /// The link.
+        link: u8,
+    },
+    /// A checked pair naming a link the robot does not have, or a link with
+    /// itself (row `a` may hold only links `b > a`).
+    BadPair {
+        /// The link whose row is wrong.
+        link: u8,
+    },
+}
+
+impl core::fmt::Display for CapsuleError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            CapsuleError::WrongLength { given, links } => {
+                write!(f, "link capsules: {given} values for {links} links")
+            }
+            CapsuleError::TooManyLinks { links } => write!(
+                f,
+                "link capsules: {links} links, more than the {MAX_LINKS} self-collision supports"
+            ),
+            CapsuleError::BadRadius { link } => write!(
+                f,
+                "link {}: the capsule radius must be positive and finite",
+                link as u32 + 1
+            ),
+            CapsuleError::BadPair { link } => write!(
+                f,
+                "link {}: a checked pair names a link that is not after it on the robot",
+                link as u32 + 1
+            ),
+        }
+    }
+}
+
+/// The links' capsules and the pairs checked, validated against a robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinkCapsules<const N: usize> {
+    /// Links with capsules (the robot's joint count), 0 when there are none.
+    n: usize,
+    /// Capsule radius per link, length units.
+    radius: [f32; N],
+    /// Per link, the radius of the sphere round its chord's mid-point that
+    /// holds its capsule inflated by [`INFLUENCE`] radii in every
+    /// configuration: half its longest chord plus `(1 + INFLUENCE) r`.
+    reach: [f32; N],
+    /// Per link, the room it may use in one step against the pairs too far
+    /// apart to be tested: `INFLUENCE r` (infinity when it has no checked pair).
+    far_room: [f32; N],
+    /// Row `a`: bit `b` set (`b > a`) when the pair `(a, b)` is checked.
+    checked: [u64; N],
+}
+
+impl<const N: usize> Default for LinkCapsules<N> {
+    fn default() -> Self {
+        Self::none()
+    }
+}
+
+impl<const N: usize> LinkCapsules<N> {
+    /// No capsules: self-collision is not checked.
+    pub const fn none() -> Self {
+        LinkCapsules {
+            n: 0,
+            radius: [0.0; N],
+            reach: [0.0; N],
+            far_room: [f32::INFINITY; N],
+            checked: [0; N],
+        }
+    }
+
+    /// Capsules of `radius` (one per link, length units) round the links of
+    /// `robot`, with the pairs of `checked` (row `a`: bit `b > a` set when
+    /// the pair is checked; see [`pairs::PairTable::checked_rows`]).
+    pub fn new(robot: &Robot<N>, radius: &[f32], checked: &[u64]) -> Result<Self, CapsuleError> {
+        let n = robot.len();
+        if n > MAX_LINKS {
+            return Err(CapsuleError::TooManyLinks { links: n });
+        }
+        for given in [radius.len(), checked.len()] {
+            if given != n {
+                return Err(CapsuleError::WrongLength { given, links: n });
+            }
+        }
+        let mut capsules = Self::none();
+        for (link, ((&r, &row), joint)) in
+            radius.iter().zip(checked).zip(robot.joints()).enumerate()
+        {
+            if !(r.is_finite() && r > 0.0 && r <= MAX_LENGTH) {
+                return Err(CapsuleError::BadRadius { link: link as u8 });
+            }
+            // Only links after this one, and only links the robot has.
+            let allowed = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 } & !((2u64 << link) - 1);
+            if row & !allowed != 0 {
+                return Err(CapsuleError::BadPair { link: link as u8 });
+            }
+            let longest = match joint.kind {
+                JointKind::Revolute => libm::sqrtf(joint.a * joint.a + joint.d * joint.d),
+                JointKind::Prismatic => {
+                    let d = max(joint.min.abs(), joint.max.abs());
+                    libm::sqrtf(joint.a * joint.a + d * d)
+                }
+            };
+            capsules.radius[link] = r;
+            capsules.reach[link] = 0.5 * longest + (1.0 + INFLUENCE) * r;
+            capsules.checked[link] = row;
+        }
+        capsules.n = n;
+        for a in 0..n {
+            for b in 0..n {
+                if capsules.is_checked(a, b) {
+                    capsules.far_room[a] = INFLUENCE * capsules.radius[a];
+                }
+            }
+        }
+        Ok(capsules)
+    }
+
+    /// Whether there are capsules (and so self-collision checks).
+    #[inline]
+    pub fn is_on(&self) -> bool {
+        self.n > 0
+    }
+
+    /// Links with capsules (0 when off).
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether there are none.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Capsule radius of link `k`, length units (0 when off).
+    #[inline]
+    pub fn radius(&self, k: usize) -> f32 {
+        self.radius.get(k).copied().unwrap_or(0.0)
+    }
+
+    /// Whether the pair of links `a`, `b` (either order) is checked.
+    #[inline]
+    pub fn is_checked(&self, a: usize, b: usize) -> bool {
+        let (a, b) = if a < b { (a, b) } else { (b, a) };
+        b < 64
+            && self
+                .checked
+                .get(a)
+                .is_some_and(|row| row & (1u64 << b) != 0)
+    }
+
+    /// The checked pairs' rows (row `a`: bit `b > a` per checked pair), as
+    /// [`LinkCapsules::new`] takes them.
+    pub fn checked_rows(&self) -> &[u64] {
+        &self.checked[..self.n.min(N)]
+    }
+
+    /// The radii, one per link.
+    pub fn radii(&self) -> &[f32] {
+        &self.radius[..self.n.min(N)]
+    }
+
+    /// How many pairs are checked.
+    pub fn checked_count(&self) -> usize {
+        self.checked_rows()
+            .iter()
+            .map(|r| r.count_ones() as usize)
+            .sum()
+    }
+}
