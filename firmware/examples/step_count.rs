@@ -226,6 +226,15 @@ fn measure<const N: usize>(
             },
         );
         line(name, n, m, "obstacles", o);
+        let l = repeat(
+            REPS,
+            &mut phases,
+            |_| {},
+            |b| {
+                black_box(b.link_pairs(sc));
+            },
+        );
+        line(name, n, m, "link_pairs", l);
         let p = repeat(
             REPS,
             &mut phases,
@@ -379,6 +388,10 @@ fn main() -> ! {
             }
             Err(e) => hprintln!("M4F pips 18 {} error {:?}", k, e),
         }
+    }
+    // What self-collision costs: the same PIPS + 8 step without capsules.
+    if let Ok(scene) = scenes::pips_without_self_collision(8) {
+        measure("pips_self_off", &scene, overhead, false, 0);
     }
     // What each law costs: one step of PIPS with 8 obstacles from the same
     // warmed-up state (the default law's), `joints` = 18.

@@ -394,14 +394,15 @@ pub fn tables(
 
     let _ = writeln!(w, "### Where the instructions go (M4F, PIPS)");
     let _ = writeln!(w);
-    let _ = writeln!(w, "| obstacles | kinematics | control law | obstacles | projection + integration | sum of phases | step | rest (state machine, copies) | one pair within influence | one pair outside |");
-    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(w, "| obstacles | kinematics | control law | obstacles | link pairs | projection + integration | sum of phases | step | rest (state machine, copies) | one pair within influence | one pair outside |");
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|");
     for k in PIPS_OBSTACLES {
         let phase = |p: &str| counts.get("pips", 18, k, p);
         let parts = [
             "kinematics",
             "control_law",
             "obstacles",
+            "link_pairs",
             "projection_integration",
         ]
         .map(phase);
@@ -413,11 +414,12 @@ pub fn tables(
         };
         let _ = writeln!(
             w,
-            "| {k} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {k} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             opt(parts[0], grouped),
             opt(parts[1], grouped),
             opt(parts[2], grouped),
             opt(parts[3], grouped),
+            opt(parts[4], grouped),
             opt(sum, grouped),
             opt(step, grouped),
             opt(rest, grouped),

@@ -7,6 +7,7 @@
 //! | kinematics | `forward_kinematics` (one pass, eqs. 5-6) |
 //! | control law | `pose_error`, then the scenario's law: `lyapunov_terms`, `weighted_rate`, `descent_rate` (first-order laws, eqs. 11-18), or `damped_rate` (damped least squares, its eq. 24 projection included) |
 //! | obstacles | `potential_gradient` (eqs. 20, 25-26) |
+//! | link pairs | `self_collision::field::link_pairs` (the checked pairs' broad and narrow phase, potential, gradient and rooms) |
 //! | projection and integration | first-order laws: `strength`, `project`, `limit_rates` (eq. 24), the step bounds (`end_twist`, `column_sizes`); every law: conservative advancement (`step_size::advancement`) and the clamped Euler update |
 //!
 //! A step that takes its first step size (no halving) runs each phase once
@@ -19,6 +20,7 @@ use capp_core::control::{descent_rate, lyapunov_terms, weighted_rate, LawInput, 
 use capp_core::kinematics::{column_sizes, end_twist, forward_kinematics, Frames};
 use capp_core::math::dot_slice;
 use capp_core::projection::{limit_rates, project, strength};
+use capp_core::self_collision::field::link_pairs;
 use capp_core::step_size::advancement;
 use capp_core::target::{pose_error, PoseError, Target};
 use capp_core::{Planner, Scenario};
@@ -76,9 +78,28 @@ impl<const N: usize> PhaseBench<N> {
         };
         bench.kinematics(scenario);
         bench.obstacles(scenario);
+        bench.link_pairs(scenario);
         bench.control_law(scenario);
         bench.law_rate = bench.rate;
         bench
+    }
+
+    /// The checked link pairs at the configuration (after [`Self::obstacles`],
+    /// as a step runs them). Returns their potential.
+    pub fn link_pairs<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+    ) -> f32 {
+        let n = self.n;
+        link_pairs(
+            scenario.robot(),
+            &self.frames,
+            scenario.capsules(),
+            &mut self.mu[..n],
+            &mut self.distance_sq[..n],
+            self.field.nearest.map(|h| h.link),
+        )
+        .potential
     }
 
     /// Forward kinematics at the configuration. Returns the end effector's x.

@@ -29,6 +29,7 @@ use capp_core::control::LawKind;
 use capp_core::kinematics::{forward_kinematics, Frames};
 use capp_core::math::Vec3;
 use capp_core::obstacle::Obstacle;
+use capp_core::self_collision::pairs::{PairTable, SAMPLES};
 use capp_core::{
     pips, Joint, Mission, Planner, Robot, Scenario, ScenarioError, Settings, StartError, StepError,
     SuperEllipsoid, Waypoint,
@@ -217,9 +218,42 @@ fn scatter<const N: usize>(
 /// costs: the default (24 in) and smaller ones (PIPS, 8 obstacles).
 pub const INFLUENCE_SWEEP_IN: [f32; 4] = [24.0, 12.0, 6.0, 3.0];
 
+/// Gives a PIPS scenario the capsules and checked pairs `capp run` gives
+/// it: [`pips::LINK_RADIUS`], the pedestal group allowed, the
+/// allowed-collision matrix of the host's seed.
+pub fn pips_capsules<const M: usize, const W: usize>(
+    scenario: &mut Scenario<PIPS_JOINTS, M, W>,
+) -> Result<(), SceneError> {
+    let radius = [pips::LINK_RADIUS; PIPS_JOINTS];
+    let mut allowed = heapless::Vec::<(u8, u8), 16>::new();
+    for pair in pips::allowed_pairs() {
+        allowed.push(pair).map_err(|_| SceneError::Size)?;
+    }
+    let table = PairTable::<PIPS_JOINTS>::new(
+        scenario.robot(),
+        &radius,
+        &allowed,
+        &pips::home(),
+        SAMPLES,
+        PAIR_SEED,
+    )
+    .map_err(ScenarioError::Capsules)?;
+    scenario.set_link_capsules(&radius, table.checked_rows())?;
+    Ok(())
+}
+
+/// The seed of the host's allowed-collision matrix (`capp_sim::problem::PAIR_SEED`).
+pub const PAIR_SEED: u32 = 1;
+
+/// [`pips`] without self-collision checks (the cost they add is the
+/// difference of the two).
+pub fn pips_without_self_collision(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    pips_with(obstacles, settings(), false)
+}
+
 /// PIPS from home toward the payload-bay target with `obstacles` obstacles (at most 64).
 pub fn pips(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
-    pips_with(obstacles, settings())
+    pips_with(obstacles, settings(), true)
 }
 
 /// [`pips`] with the avoidance influence distance set to `influence_in` inches
@@ -230,17 +264,21 @@ pub fn pips_with_influence(
 ) -> Result<Scene<PIPS_JOINTS>, SceneError> {
     let mut s = settings();
     s.avoidance.influence_distance = influence_in;
-    pips_with(obstacles, s)
+    pips_with(obstacles, s, true)
 }
 
 /// [`pips`] driven by the law `kind` (the same obstacles).
 pub fn pips_with_law(obstacles: usize, kind: LawKind) -> Result<Scene<PIPS_JOINTS>, SceneError> {
     let mut s = settings();
     s.law.kind = kind;
-    pips_with(obstacles, s)
+    pips_with(obstacles, s, true)
 }
 
-fn pips_with(obstacles: usize, settings: Settings) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+fn pips_with(
+    obstacles: usize,
+    settings: Settings,
+    self_collision: bool,
+) -> Result<Scene<PIPS_JOINTS>, SceneError> {
     if obstacles > MAX_OBSTACLES {
         return Err(SceneError::Size);
     }
@@ -260,7 +298,10 @@ fn pips_with(obstacles: usize, settings: Settings) -> Result<Scene<PIPS_JOINTS>,
     scatter(&frames, BAY_TARGET.0, equipment, 0x5eed_0018, &mut list)?;
     let mission = Mission::new(&[Waypoint::pose(BAY_TARGET.0, BAY_TARGET.1)], settings)
         .map_err(ScenarioError::Mission)?;
-    let scenario = Scenario::new(robot, &list, &mission)?;
+    let mut scenario = Scenario::new(robot, &list, &mission)?;
+    if self_collision {
+        pips_capsules(&mut scenario)?;
+    }
     Ok(Scene {
         scenario,
         start,
@@ -401,7 +442,8 @@ fn pips_scene(
     let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
     let settings = settings(Settings::for_robot(&robot));
     let mission = Mission::new(waypoints, settings).map_err(ScenarioError::Mission)?;
-    let scenario = Scenario::new(robot, obstacles, &mission)?;
+    let mut scenario = Scenario::new(robot, obstacles, &mission)?;
+    pips_capsules(&mut scenario)?;
     Ok(Scene {
         scenario,
         start,

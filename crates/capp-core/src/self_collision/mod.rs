@@ -35,8 +35,12 @@ pub const MAX_LINKS: usize = 64;
 /// Link pairs are in the potential (and narrow-phase tested) while their
 /// clearance `c = gap / (r_a + r_b)` is below this; beyond it a pair is at
 /// least this many radius sums apart, which is all conservative advancement
-/// needs to know of it.
-pub const INFLUENCE: f32 = 4.0;
+/// needs to know of it. 2 is the band where the projection engages with the
+/// default `engage_clearance` (1: engaged below `c = 2`). A wider band
+/// (4 was tried) keeps the truss's links two apart (9 in apart at PIPS
+/// home, structurally) in the potential all the time: a constant push in
+/// `mu` that only tilts the projection, and twice the narrow-phase tests.
+pub const INFLUENCE: f32 = 2.0;
 
 /// Why link capsules were rejected. `link` is 0-based (DH link `link + 1`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,15 +145,26 @@ impl<const N: usize> LinkCapsules<N> {
             }
         }
         let mut capsules = Self::none();
-        for (link, ((&r, &row), joint)) in
-            radius.iter().zip(checked).zip(robot.joints()).enumerate()
+        // Zipped iterators, not indices: no panic path on the board.
+        let slots = capsules
+            .radius
+            .iter_mut()
+            .zip(capsules.reach.iter_mut())
+            .zip(capsules.checked.iter_mut());
+        for (link, (((&r, &row), joint), ((radius, reach), checked))) in radius
+            .iter()
+            .zip(checked)
+            .zip(robot.joints())
+            .zip(slots)
+            .enumerate()
         {
             if !(r.is_finite() && r > 0.0 && r <= MAX_LENGTH) {
                 return Err(CapsuleError::BadRadius { link: link as u8 });
             }
             // Only links after this one, and only links the robot has.
-            let allowed = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 } & !((2u64 << link) - 1);
-            if row & !allowed != 0 {
+            let robot_links = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 };
+            let after = !((2u64 << link) - 1);
+            if row & !(robot_links & after) != 0 {
                 return Err(CapsuleError::BadPair { link: link as u8 });
             }
             let longest = match joint.kind {
@@ -159,16 +174,26 @@ impl<const N: usize> LinkCapsules<N> {
                     libm::sqrtf(joint.a * joint.a + d * d)
                 }
             };
-            capsules.radius[link] = r;
-            capsules.reach[link] = 0.5 * longest + (1.0 + INFLUENCE) * r;
-            capsules.checked[link] = row;
+            *radius = r;
+            *reach = 0.5 * longest + (1.0 + INFLUENCE) * r;
+            *checked = row;
         }
         capsules.n = n;
-        for a in 0..n {
-            for b in 0..n {
-                if capsules.is_checked(a, b) {
-                    capsules.far_room[a] = INFLUENCE * capsules.radius[a];
-                }
+        // A link has a far room when it is in any checked pair.
+        let mut paired = 0u64;
+        for (a, &row) in capsules.checked.iter().enumerate() {
+            if row != 0 {
+                paired |= row | (1u64 << (a & 63));
+            }
+        }
+        for (a, (room, &r)) in capsules
+            .far_room
+            .iter_mut()
+            .zip(&capsules.radius)
+            .enumerate()
+        {
+            if a < 64 && paired & (1u64 << a) != 0 {
+                *room = INFLUENCE * r;
             }
         }
         Ok(capsules)

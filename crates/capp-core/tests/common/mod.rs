@@ -304,6 +304,8 @@ pub struct Run {
     pub joints: Vec<f32>,
     /// The final step's report.
     pub last: StepReport,
+    /// The smallest checked link-pair gap seen (f64; infinity without capsules).
+    pub min_link_gap: f64,
 }
 
 /// Runs to the end, checking after every step: limits, rate limits, finite
@@ -323,6 +325,7 @@ pub fn run_checked(sc: &Sc, start: &[f32]) -> Run {
     let mut v = vec![planner.last_report().v];
     let mut rates = vec![];
     let mut escape_steps = 0;
+    let mut min_link_gap = f64::INFINITY;
     let outcome = planner
         .run(sc, |p, r| {
             let q = p.joints();
@@ -368,6 +371,26 @@ pub fn run_checked(sc: &Sc, start: &[f32]) -> Run {
                     r.step
                 );
             }
+            if sc.capsules().is_on() {
+                // Every row, and densely between rows: no two checked
+                // capsules touch (f32 storage: a few 1e-6 of slack).
+                for i in 1..=8 {
+                    let f = i as f64 / 8.0;
+                    let qi: Vec<f64> = previous
+                        .iter()
+                        .zip(q)
+                        .map(|(&a, &b)| a as f64 + (b as f64 - a as f64) * f)
+                        .collect();
+                    let (gap, a, b) = min_link_gap64(sc, &qi);
+                    min_link_gap = min_link_gap.min(gap);
+                    assert!(
+                        gap > -1e-5,
+                        "step {}: links {a} and {b} overlap by {} (at {f} of the step)",
+                        r.step,
+                        -gap
+                    );
+                }
+            }
             if !matches!(r.escape, EscapeState::Descending { .. }) {
                 escape_steps += 1;
             }
@@ -384,7 +407,62 @@ pub fn run_checked(sc: &Sc, start: &[f32]) -> Run {
         escape_steps,
         joints: planner.joints().to_vec(),
         last: *planner.last_report(),
+        min_link_gap,
     }
+}
+
+/// Distance between the segments `a0 a1` and `b0 b1`, in f64, computed
+/// independently of the core: for each point of the first segment the
+/// closest point of the second is its clamped projection, and the distance
+/// along the first is convex, so a ternary search over it converges.
+pub fn segment_distance64(a0: V3, a1: V3, b0: V3, b1: V3) -> f64 {
+    let db = sub(b1, b0);
+    let e = dot(db, db);
+    let at = |s: f64| {
+        let x = add(a0, scale(sub(a1, a0), s));
+        let t = if e > 0.0 {
+            (dot(sub(x, b0), db) / e).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let d = sub(x, add(b0, scale(db, t)));
+        dot(d, d).sqrt()
+    };
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    // (2/3)^64 of the segment: far below f32's resolution.
+    for _ in 0..64 {
+        let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+        if at(m1) <= at(m2) {
+            hi = m2;
+        } else {
+            lo = m1;
+        }
+    }
+    at(0.0).min(at(1.0)).min(at(0.5 * (lo + hi)))
+}
+
+/// The smallest capsule gap over the checked link pairs of `sc` at `q` (f64
+/// kinematics; infinity without capsules), with its two links.
+pub fn min_link_gap64(sc: &Sc, q: &[f64]) -> (f64, usize, usize) {
+    let caps = sc.capsules();
+    let joints = sc.robot().joints();
+    let chain = fk64(joints, q);
+    let o = &chain.origins;
+    let mut best = (f64::INFINITY, 0, 0);
+    for a in 0..caps.len() {
+        for b in a + 1..caps.len() {
+            if !caps.is_checked(a, b) {
+                continue;
+            }
+            let gap = segment_distance64(o[a], o[a + 1], o[b], o[b + 1])
+                - caps.radius(a) as f64
+                - caps.radius(b) as f64;
+            if gap < best.0 {
+                best = (gap, a, b);
+            }
+        }
+    }
+    best
 }
 
 /// Distance from the hand of `q` (f64 forward kinematics) to `target`.
