@@ -326,8 +326,6 @@ struct Links {
     radius: Vec<f64>,
     /// The checked pairs, `a < b`.
     pairs: Vec<(usize, usize)>,
-    /// The longest chord each link can have.
-    longest: Vec<f64>,
 }
 
 /// A problem's chain, obstacles, avoidance points and link capsules,
@@ -341,6 +339,8 @@ pub struct Geometry {
     /// `None` when self-collision is off (or the scenario's capsules are
     /// invalid: [`Problem::validate`] refuses those).
     links: Option<Links>,
+    /// The longest chord each link can have (`l_k` of the module docs).
+    longest: Vec<f64>,
 }
 
 impl Links {
@@ -354,21 +354,9 @@ impl Links {
             .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
             .filter(|&(a, b)| table.status(a, b) == PairStatus::Checked)
             .collect();
-        let longest = problem
-            .joints
-            .iter()
-            .map(|j| {
-                let d = match j.kind {
-                    JointKind::Revolute => j.d.abs() as f64,
-                    JointKind::Prismatic => (j.min.abs() as f64).max(j.max.abs() as f64),
-                };
-                (j.a as f64).hypot(d)
-            })
-            .collect();
         Some(Links {
             radius: problem.links.radius.iter().map(|&r| r as f64).collect(),
             pairs,
-            longest,
         })
     }
 
@@ -399,6 +387,17 @@ impl Geometry {
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
             links: Links::new(problem),
+            longest: problem
+                .joints
+                .iter()
+                .map(|j| {
+                    let d = match j.kind {
+                        JointKind::Revolute => j.d.abs() as f64,
+                        JointKind::Prismatic => (j.min.abs() as f64).max(j.max.abs() as f64),
+                    };
+                    (j.a as f64).hypot(d)
+                })
+                .collect(),
         }
     }
 
@@ -526,12 +525,8 @@ impl Geometry {
     }
 
     /// Per link, a bound on how far any point of it travels along the
-    /// straight joint-space segment `a -> b` (the module docs' `delta_k`);
-    /// empty when self-collision is off.
+    /// straight joint-space segment `a -> b` (the module docs' `delta_k`).
     pub fn link_motion(&self, a: &[f64], b: &[f64]) -> Vec<f64> {
-        let Some(links) = &self.links else {
-            return Vec::new();
-        };
         let n = self.joints.len();
         let mut delta = vec![0.0; n];
         for (j, joint) in self.joints.iter().enumerate() {
@@ -539,7 +534,7 @@ impl Geometry {
             // The lever of joint j on links j..: the chords from its pivot out.
             let mut lever = 0.0;
             for (k, d) in delta.iter_mut().enumerate().skip(j) {
-                lever += links.longest[k];
+                lever += self.longest[k];
                 *d += dq
                     * match joint.kind {
                         JointKind::Revolute => lever,

@@ -163,6 +163,15 @@ fn segment_distance_matches_brute_force() {
         ];
         agrees("nearly parallel", p0, p1, q0p, q1t);
 
+        // Crossing at a tiny angle.
+        let c = at(p0, p1, rng.next());
+        let w = [u[0] + tilt * n[0] * size, u[1] + tilt * n[1] * size, u[2] + tilt * n[2] * size];
+        let (a, b) = (rng.range(0.05, 1.0), rng.range(0.05, 1.0));
+        let q0c = [c[0] - a * w[0], c[1] - a * w[1], c[2] - a * w[2]];
+        let q1c = [c[0] + b * w[0], c[1] + b * w[1], c[2] + b * w[2]];
+        agrees("crossing nearly parallel", p0, p1, q0c, q1c);
+        assert!(segment_distance(p0, p1, q0c, q1c).distance <= 1e-9 * size);
+
         // Crossing: the second segment passes through a point of the first.
         let c = at(p0, p1, rng.next());
         let dir = rng.point(size);
@@ -219,8 +228,39 @@ fn random_q(problem: &Problem, rng: &mut Rng) -> Vec<f64> {
         .collect()
 }
 
+/// How far the chord points of each link travel (path length, sampled) on
+/// the straight joint-space segment `a -> b`, against `t delta` all along.
+fn motion_within_bound(geometry: &Geometry, a: &[f64], b: &[f64]) {
+    let delta = geometry.link_motion(a, b);
+    let (mut last, _) = geometry.forward(a);
+    let mut travelled = vec![0.0f64; delta.len()];
+    const K: usize = 200;
+    for i in 1..=K {
+        // The bound of the segment a -> q(t) is t delta.
+        let t = i as f64 / K as f64;
+        let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
+        let (o, _) = geometry.forward(&q);
+        for (k, (d, moved)) in delta.iter().zip(&mut travelled).enumerate() {
+            // The chord's ends and points along it; the farthest travelled.
+            *moved += [0.0, 0.3, 0.5, 1.0]
+                .iter()
+                .map(|&s| dist(at(o[k], o[k + 1], s), at(last[k], last[k + 1], s)))
+                .fold(0.0, f64::max);
+            assert!(
+                *moved <= t * d * (1.0 + 1e-9) + 1e-12,
+                "link {}: travelled {moved} by t = {t}, bound {}",
+                k + 1,
+                t * d
+            );
+        }
+        last = o;
+    }
+}
+
 /// No point of a link travels farther than [`Geometry::link_motion`] says,
-/// on random straight joint-space segments of PIPS (both joint kinds).
+/// on random straight joint-space segments of PIPS (both joint kinds); and
+/// the bound is tight where it should be: a stretched planar arm turning
+/// about its base moves its far end exactly that far.
 #[test]
 fn the_link_motion_bound_holds() {
     let problem = pips();
@@ -234,29 +274,17 @@ fn the_link_motion_bound_holds() {
         for (x, y) in b.iter_mut().zip(&a) {
             *x = y + f * (*x - y);
         }
-        let delta = geometry.link_motion(&a, &b);
-        let (start, _) = geometry.forward(&a);
-        const K: usize = 200;
-        for i in 1..=K {
-            // The bound of the segment a -> q(t) is t delta.
-            let t = i as f64 / K as f64;
-            let q: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + t * (y - x)).collect();
-            let (o, _) = geometry.forward(&q);
-            for (k, d) in delta.iter().enumerate() {
-                // Both chord ends and points along it.
-                let moved = [0.0, 0.3, 0.5, 1.0]
-                    .iter()
-                    .map(|&s| dist(at(o[k], o[k + 1], s), at(start[k], start[k + 1], s)))
-                    .fold(0.0, f64::max);
-                assert!(
-                    moved <= t * d * (1.0 + 1e-9) + 1e-9,
-                    "link {}: moved {moved} by t = {t}, bound {}",
-                    k + 1,
-                    t * d
-                );
-            }
-        }
+        motion_within_bound(&geometry, &a, &b);
     }
+    let planar = folding_arm(false);
+    let geometry = Geometry::new(&planar);
+    let (a, b) = ([0.0; 4], [0.5, 0.0, 0.0, 0.0]);
+    motion_within_bound(&geometry, &a, &b);
+    // Four 1 m links, 0.5 rad: the tip's arc is 2 m, the bound's.
+    let delta = geometry.link_motion(&a, &b);
+    assert!((delta[3] - 2.0).abs() < 1e-12, "{delta:?}");
+    let (o, _) = geometry.forward(&b);
+    assert!((o[4][0] - 4.0 * 0.5f64.cos()).abs() < 1e-12);
 }
 
 /// The checker's capsule gaps are the planner's chords (`Frames::pivot` to
