@@ -22,12 +22,15 @@
 //! configuration.
 //!
 //! A pair *self-collides* when its gap is below `-SELF_SLACK x scale`
-//! ([`self_tolerance`]; `scale`, the arm's size, as the kinematics
-//! tolerance has it). The planner decides a gap in `f32`: each frame origin
-//! it computes carries rounding of a few ulps of the arm's size per joint,
-//! so a pair it accepted at a gap just above 0 can be a few `1e-6 x scale`
-//! below 0 here. `1e-5 x scale` is above that and still tiny (3 thousandths
-//! of an inch on PIPS, a fifth of a percent of its 1.5 in capsule radius):
+//! ([`self_tolerance`]; [`scale`], the arm's size, as the kinematics
+//! tolerance has it). The trajectory's joint values are the planner's `f32`
+//! values exactly, but the planner computed its frames and gaps in `f32`:
+//! each frame origin carries rounding of a few ulps of the arm's size per
+//! joint (the recorded/exact end-effector mismatch the report prints shows
+//! it: 3e-5 to 5e-5 in on PIPS, about 2e-7 of its scale of 250 in), so a
+//! pair the planner accepted at a gap just above 0 can be that far below 0
+//! here. `1e-5 x scale` is fifty times that and still tiny (2.5 thousandths
+//! of an inch on PIPS, a sixth of a percent of its 1.5 in capsule radius):
 //! an overlap beyond it is no rounding. Each row with such a pair, and each
 //! segment between rows with one at a configuration checked inside it, is
 //! one [`ViolationKind::SelfCollision`].
@@ -366,7 +369,10 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
     // Describes an overlap of `pair` in words.
     let overlap = |pair: &LinkGap| {
         let (a, b) = pair.links;
-        let (ra, rb) = (problem.links.radius[a] as f64, problem.links.radius[b] as f64);
+        let (ra, rb) = (
+            problem.links.radius[a] as f64,
+            problem.links.radius[b] as f64,
+        );
         format!(
             "{} and {} overlap: their capsules are {:.4} {unit} into each other (chords {:.4} {unit} apart, radii {ra} + {rb})",
             problem.link_label(a),
@@ -383,7 +389,7 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
         {
             report.closest_links = Some(found);
         }
-        let collides = !(found.pair.gap >= -self_tolerance);
+        let collides = found.pair.gap.is_nan() || found.pair.gap < -self_tolerance;
         if collides
             && report
                 .worst_self_collision
@@ -490,7 +496,7 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
                 report.self_collisions += 1;
                 let others = gaps
                     .iter()
-                    .filter(|g| !(**g >= -self_tolerance))
+                    .filter(|g| g.is_nan() || **g < -self_tolerance)
                     .count()
                     - 1;
                 let more = if others > 0 {

@@ -649,7 +649,11 @@ impl Bisection<'_> {
         let mut right = Vec::with_capacity(doubt.len());
         for &(i, g0, g1) in &doubt {
             let gm = self.links.gap(&origins, i);
-            if self.sweep.worst.is_none_or(|(w, _)| gm < w.gap || gm.is_nan()) {
+            if self
+                .sweep
+                .worst
+                .is_none_or(|(w, _)| gm < w.gap || gm.is_nan())
+            {
                 self.sweep.worst = Some((
                     LinkGap {
                         gap: gm,
@@ -658,7 +662,7 @@ impl Bisection<'_> {
                     tm,
                 ));
             }
-            if !(gm >= self.floor) {
+            if gm.is_nan() || gm < self.floor {
                 self.sweep.certified = false;
             }
             left.push((i, g0, gm));

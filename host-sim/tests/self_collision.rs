@@ -109,7 +109,10 @@ fn agrees(what: &str, p0: [f64; 3], p1: [f64; 3], q0: [f64; 3], q1: [f64; 3]) {
     );
     assert!(d.distance <= grid(p0, p1, q0, q1) + 1e-12 * size, "{what}");
     // The reported parameters attain it.
-    assert!((0.0..=1.0).contains(&d.s) && (0.0..=1.0).contains(&d.t), "{what}");
+    assert!(
+        (0.0..=1.0).contains(&d.s) && (0.0..=1.0).contains(&d.t),
+        "{what}"
+    );
     let attained = dist(at(p0, p1, d.s), at(q0, q1, d.t));
     assert!((attained - d.distance).abs() <= 1e-12 * size, "{what}");
     // Symmetric, and independent of each segment's direction.
@@ -143,7 +146,11 @@ fn segment_distance_matches_brute_force() {
         // Parallel and anti-parallel, overlapping or not, and collinear.
         let u = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
         let k = rng.range(-2.0, 2.0);
-        let off = if i % 4 == 0 { [0.0; 3] } else { rng.point(size) };
+        let off = if i % 4 == 0 {
+            [0.0; 3]
+        } else {
+            rng.point(size)
+        };
         let shift = rng.range(-1.5, 1.5);
         let q0p = [
             p0[0] + off[0] + shift * u[0],
@@ -165,7 +172,11 @@ fn segment_distance_matches_brute_force() {
 
         // Crossing at a tiny angle.
         let c = at(p0, p1, rng.next());
-        let w = [u[0] + tilt * n[0] * size, u[1] + tilt * n[1] * size, u[2] + tilt * n[2] * size];
+        let w = [
+            u[0] + tilt * n[0] * size,
+            u[1] + tilt * n[1] * size,
+            u[2] + tilt * n[2] * size,
+        ];
         let (a, b) = (rng.range(0.05, 1.0), rng.range(0.05, 1.0));
         let q0c = [c[0] - a * w[0], c[1] - a * w[1], c[2] - a * w[2]];
         let q1c = [c[0] + b * w[0], c[1] + b * w[1], c[2] + b * w[2]];
@@ -194,23 +205,43 @@ fn segment_distance_known_values() {
     let d = |p0, p1, q0, q1| segment_distance(p0, p1, q0, q1).distance;
     // Skew unit segments one apart, crossing in projection.
     assert_eq!(
-        d([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 1.0], [0.0, 1.0, 1.0]),
+        d(
+            [-1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 1.0],
+            [0.0, 1.0, 1.0]
+        ),
         1.0
     );
     // Collinear, a gap of 2 between them.
     assert_eq!(
-        d([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0], [5.0, 0.0, 0.0]),
+        d(
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0],
+            [5.0, 0.0, 0.0]
+        ),
         2.0
     );
     // Parallel, side by side.
     assert_eq!(
-        d([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [1.0, 3.0, 0.0], [2.0, 3.0, 0.0]),
+        d(
+            [0.0, 0.0, 0.0],
+            [4.0, 0.0, 0.0],
+            [1.0, 3.0, 0.0],
+            [2.0, 3.0, 0.0]
+        ),
         3.0
     );
     // The lines cross, the segments do not: an end (1, 0, 0) to the other
     // segment's end (2, 0, 0).
     assert_eq!(
-        d([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0]),
+        d(
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0]
+        ),
         1.0
     );
 }
@@ -343,7 +374,8 @@ fn folding_arm(self_collision: bool) -> Problem {
          [target]\nposition = [2.0, 1.0, 0.0]\n",
         std::f64::consts::PI - 2.6
     );
-    let problem = scenario_file::parse(&text, Path::new("fold.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let problem =
+        scenario_file::parse(&text, Path::new("fold.toml")).unwrap_or_else(|e| panic!("{e}"));
     problem.validate().unwrap_or_else(|e| panic!("{e}"));
     problem
 }
@@ -378,18 +410,28 @@ fn swing(problem: &Problem, turn: f64, rows: usize) -> Trajectory {
 fn check_rejects_a_link_passing_through_another_at_rows() {
     let problem = folding_arm(true);
     let geometry = Geometry::new(&problem);
-    assert!(geometry.checked_pairs().contains(&(0, 2)), "{:?}", geometry.checked_pairs());
+    assert!(
+        geometry.checked_pairs().contains(&(0, 2)),
+        "{:?}",
+        geometry.checked_pairs()
+    );
     let t = swing(&problem, std::f64::consts::PI, 41);
     let report = check::check(&problem, &t);
     assert!(report.has(ViolationKind::SelfCollision), "{report}");
     assert!(!report.accepted());
     let worst = report.worst_self_collision.expect("the deepest overlap");
     // Link 3 crosses link 1 (and link 4 follows it, crossing link 1 or 2).
-    assert!(worst.pair.links.0 == 0 && worst.pair.gap < -0.1, "{worst:?}");
+    assert!(
+        worst.pair.links.0 == 0 && worst.pair.gap < -0.1,
+        "{worst:?}"
+    );
     let rows_colliding = report.self_collisions - report.self_collisions_between;
     assert!(rows_colliding >= 3, "{report}");
     let text = report.to_string();
-    assert!(text.contains("self-collision: link 1 and link 3 overlap"), "{text}");
+    assert!(
+        text.contains("self-collision: link 1 and link 3 overlap"),
+        "{text}"
+    );
     assert!(text.contains("self-collisions:"), "{text}");
     assert_eq!(
         report.self_collisions,
@@ -455,6 +497,9 @@ fn a_near_miss_is_accepted_and_its_closest_pair_named() {
     assert!(report.accepted(), "{report}");
     let c = report.closest_links.unwrap();
     assert!(c.pair.gap > 0.0, "{c:?}");
-    assert!(report.to_string().contains("closest link pair: links"), "{report}");
+    assert!(
+        report.to_string().contains("closest link pair: links"),
+        "{report}"
+    );
     let _ = SWEEP_FRACTION;
 }
