@@ -45,10 +45,10 @@
 //! by at most `delta_a + delta_b` over the segment and stays at or above
 //! `(gap(a) + gap(b) - delta_a - delta_b) / 2` all along it.
 //! [`Geometry::sweep_links`] bisects the segment wherever that bound does
-//! not keep a pair apart, until the two links move no more than
-//! [`SWEEP_FRACTION`] of their radii between the configurations it
-//! evaluates (at most [`SWEEP_BUDGET`] of them per segment): pairs far
-//! apart cost nothing, close ones are sampled densely.
+//! not keep a pair apart, until neither link of such a pair moves more than
+//! [`SWEEP_FRACTION`] of the pair's smaller radius between the
+//! configurations it evaluates (at most [`SWEEP_BUDGET`] of them per
+//! segment): pairs far apart cost nothing, close ones are sampled densely.
 //!
 //! [`Geometry`] is the obstacle, avoidance-point and capsule model prepared
 //! once for repeated queries of single configurations (`capp-suite`'s
