@@ -9,7 +9,7 @@
 //!   of the diagonal of the joint box), `max_j |dq_j| / rate_j` for the
 //!   reported path time.
 //! * Every edge is checked densely: no joint moves more than
-//!   [`DENSE_STEP`](crate::metrics::DENSE_STEP) (0.01 rad or length unit)
+//!   [`DENSE_STEP`] (0.01 rad or length unit)
 //!   between checked configurations (coarse-to-fine order, so a blocked edge
 //!   is found early); a configuration is free when every avoidance point has
 //!   `C - 1 > 0` with the problem's margins and, when the scenario checks
