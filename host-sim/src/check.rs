@@ -1,28 +1,77 @@
 //! An independent check of a joint trajectory against a problem.
 //!
-//! Nothing here uses the planner's kinematics, obstacles or potential: every
-//! pose and clearance comes from [`crate::geometry`], the independent `f64`
-//! model of the robot and obstacles (DH products in `f64`, each obstacle
-//! evaluated directly from eq. 25, with the margin of the point's kind).
-//! Avoidance points are every frame origin `o_1..o_n` and `points_per_link`
-//! interior points per link, at every row of the trajectory.
+//! Nothing here uses the planner's kinematics, obstacles, potential or link
+//! capsules: every pose, clearance and capsule gap comes from
+//! [`crate::geometry`], the independent `f64` model of the robot and
+//! obstacles (DH products in `f64`, each obstacle evaluated directly from
+//! eq. 25, with the margin of the point's kind; link chords segment to
+//! segment). Avoidance points are every frame origin `o_1..o_n` and
+//! `points_per_link` interior points per link, at every row of the
+//! trajectory.
 //!
 //! Per row: finite values, joint limits, recorded end-effector position against
-//! the exact one, clearance of every point from every obstacle. Between rows:
+//! the exact one, clearance of every point from every obstacle, and, when the
+//! scenario checks self-collision, the gap of every checked pair of link
+//! capsules (the pairs of [`Problem::pair_table`]). Between rows:
 //! `|q[k+1] - q[k]| <= h[k+1] max_rate (1 + 1e-4)` per joint, plus two `f32`
-//! ulps of the values (the trajectory is stored in `f32`). Row 0 must be the
-//! problem's start configuration.
-
+//! ulps of the values (the trajectory is stored in `f32`); and the capsules
+//! densely along the straight joint-space segment from one row to the next
+//! ([`Geometry::sweep_links`]: wherever a pair might come near, no link moves
+//! more than a quarter of its capsule radius between the configurations
+//! checked; at most 4 096 per segment). Row 0 must be the problem's start
+//! configuration.
+//!
+//! A pair *self-collides* when its gap is below `-SELF_SLACK x scale`
+//! ([`self_tolerance`]; [`scale`], the arm's size, as the kinematics
+//! tolerance has it). The trajectory's joint values are the planner's `f32`
+//! values exactly, but the planner computed its frames and gaps in `f32`:
+//! each frame origin carries rounding of a few ulps of the arm's size per
+//! joint (the recorded/exact end-effector mismatch the report prints shows
+//! it: 3e-5 to 5e-5 in on PIPS, about 2e-7 of its scale of 250 in), so a
+//! pair the planner accepted at a gap just above 0 can be that far below 0
+//! here. `1e-5 x scale` is fifty times that and still tiny (2.5 thousandths
+//! of an inch on PIPS, a sixth of a percent of its 1.5 in capsule radius):
+//! an overlap beyond it is no rounding. Each row with such a pair, and each
+//! segment between rows with one at a configuration checked inside it, is
+//! one [`ViolationKind::SelfCollision`].
 use std::fmt;
 
 use capp_core::JointKind;
 
-use crate::geometry::{forward, Geometry};
+use crate::geometry::{forward, Geometry, LinkGap};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
 /// Relative slack of the rate check.
 pub const RATE_SLACK: f64 = 1.0e-4;
+
+/// A capsule gap below `-SELF_SLACK` times the arm's scale is a
+/// self-collision ([`self_tolerance`]; the module docs say why).
+pub const SELF_SLACK: f64 = 1.0e-5;
+
+/// The arm's size, length units: 1 plus every joint's `|a| + |d|` (and a
+/// prismatic joint's largest extension); the tolerances of the
+/// kinematics and self-collision checks are fractions of it.
+pub fn scale(problem: &Problem) -> f64 {
+    1.0 + problem
+        .joints
+        .iter()
+        .map(|j| {
+            j.a.abs() as f64
+                + j.d.abs() as f64
+                + match j.kind {
+                    JointKind::Prismatic => j.min.abs().max(j.max.abs()) as f64,
+                    JointKind::Revolute => 0.0,
+                }
+        })
+        .sum::<f64>()
+}
+
+/// How far two capsules may overlap before it counts as a self-collision,
+/// length units: [`SELF_SLACK`] times [`scale`].
+pub fn self_tolerance(problem: &Problem) -> f64 {
+    SELF_SLACK * scale(problem)
+}
 
 /// What kind of rule a row broke.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,6 +86,8 @@ pub enum ViolationKind {
     RateLimit,
     /// An avoidance point inside an inflated obstacle.
     Collision,
+    /// Two checked link capsules overlapping, at a row or between rows.
+    SelfCollision,
     /// The recorded end-effector position disagrees with the exact kinematics.
     Kinematics,
 }
@@ -49,6 +100,7 @@ impl fmt::Display for ViolationKind {
             ViolationKind::JointLimit => "joint limit",
             ViolationKind::RateLimit => "rate limit",
             ViolationKind::Collision => "collision",
+            ViolationKind::SelfCollision => "self-collision",
             ViolationKind::Kinematics => "kinematics",
         })
     }
@@ -67,6 +119,17 @@ pub struct Violation {
     pub message: String,
 }
 
+/// The closest approach of two checked link capsules.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkApproach {
+    /// The pair and its gap (length units; negative: overlap).
+    pub pair: LinkGap,
+    /// The step of the row, or of the row ending the segment it was found in.
+    pub step: u64,
+    /// Whether it was between rows (on the segment ending at `step`).
+    pub between: bool,
+}
+
 /// The result of a check.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CheckReport {
@@ -76,6 +139,25 @@ pub struct CheckReport {
     pub violations: Vec<Violation>,
     /// Smallest `C - 1` of any point / obstacle pair: value, step, point, obstacle (1-based).
     pub min_clearance: Option<(f64, u64, usize, usize)>,
+    /// Whether self-collision was checked (the scenario enables it).
+    pub self_checked: bool,
+    /// Rows and segments between rows with a self-collision (the
+    /// [`ViolationKind::SelfCollision`] violations).
+    pub self_collisions: usize,
+    /// Of those, segments between rows.
+    pub self_collisions_between: usize,
+    /// The closest checked pair of link capsules over the rows and the
+    /// configurations checked between them; `None` when none is checked.
+    pub closest_links: Option<LinkApproach>,
+    /// The deepest self-collision, when there is one.
+    pub worst_self_collision: Option<LinkApproach>,
+    /// Segments between rows whose capsule check ran out of its budget
+    /// before it was as dense as asked (a step far beyond the rate limits).
+    pub sparse_segments: usize,
+    /// The overlap a self-collision exceeds ([`self_tolerance`]).
+    pub self_tolerance: f64,
+    /// The problem's length unit, for the text.
+    pub unit: String,
     /// Largest difference between recorded and exact end-effector positions.
     pub max_position_mismatch: f64,
     /// Exact final position error to the target.
@@ -129,6 +211,60 @@ impl fmt::Display for CheckReport {
             )?,
             None => writeln!(f, "no obstacles")?,
         }
+        let unit = &self.unit;
+        let at = |a: &LinkApproach| {
+            if a.between {
+                format!("between rows, in the step to step {}", a.step)
+            } else {
+                format!("at step {}", a.step)
+            }
+        };
+        if !self.self_checked {
+            writeln!(f, "self-collision: not checked (off for this scenario)")?;
+        } else if let Some(c) = self.closest_links {
+            let (a, b) = c.pair.links;
+            let apart = if c.pair.gap >= 0.0 {
+                format!("capsules {:.4} {unit} apart", c.pair.gap)
+            } else {
+                format!("capsules overlap by {:.4} {unit}", -c.pair.gap)
+            };
+            writeln!(
+                f,
+                "closest link pair: links {} and {}, {apart} {}",
+                a + 1,
+                b + 1,
+                at(&c)
+            )?;
+        } else {
+            writeln!(f, "self-collision: no pair of links is checked")?;
+        }
+        if self.self_checked {
+            match self.worst_self_collision {
+                Some(w) => writeln!(
+                    f,
+                    "self-collisions: {} ({} at rows, {} between rows); the deepest: links {} and {} overlap by {:.4} {unit} {}",
+                    self.self_collisions,
+                    self.self_collisions - self.self_collisions_between,
+                    self.self_collisions_between,
+                    w.pair.links.0 + 1,
+                    w.pair.links.1 + 1,
+                    -w.pair.gap,
+                    at(&w)
+                )?,
+                None => writeln!(
+                    f,
+                    "self-collisions: 0 (no checked capsules overlap by more than {:.1e} {unit})",
+                    self.self_tolerance
+                )?,
+            }
+            if self.sparse_segments > 0 {
+                writeln!(
+                    f,
+                    "{} segments between rows moved too far for the capsule check's budget: checked less densely",
+                    self.sparse_segments
+                )?;
+            }
+        }
         writeln!(
             f,
             "largest recorded/exact end-effector mismatch: {:.2e}",
@@ -152,12 +288,26 @@ impl fmt::Display for CheckReport {
 
 /// Checks `trajectory` against `problem`.
 pub fn check(problem: &Problem, trajectory: &Trajectory) -> CheckReport {
+    check_with(problem, &Geometry::new(problem), trajectory)
+}
+
+/// [`check`] with `problem`'s geometry already prepared ([`Geometry::new`]).
+pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajectory) -> CheckReport {
     let n = problem.joints.len();
     let mut violations = Vec::new();
+    let self_tolerance = self_tolerance(problem);
     let mut report = CheckReport {
         rows: trajectory.rows.len(),
         violations: Vec::new(),
         min_clearance: None,
+        self_checked: geometry.self_collision(),
+        self_collisions: 0,
+        self_collisions_between: 0,
+        closest_links: None,
+        worst_self_collision: None,
+        sparse_segments: 0,
+        self_tolerance,
+        unit: problem.length_unit.clone(),
         max_position_mismatch: 0.0,
         final_position_error: f64::INFINITY,
         final_orientation_error: None,
@@ -175,21 +325,7 @@ pub fn check(problem: &Problem, trajectory: &Trajectory) -> CheckReport {
         });
         return report;
     }
-    let geometry = Geometry::new(problem);
-    let scale = 1.0
-        + problem
-            .joints
-            .iter()
-            .map(|j| {
-                j.a.abs() as f64
-                    + j.d.abs() as f64
-                    + match j.kind {
-                        JointKind::Prismatic => j.min.abs().max(j.max.abs()) as f64,
-                        JointKind::Revolute => 0.0,
-                    }
-            })
-            .sum::<f64>();
-    let position_tolerance = 1.0e-4 * scale;
+    let position_tolerance = 1.0e-4 * scale(problem);
     let ulp = f32::EPSILON as f64;
 
     let mut push = |line, step, kind, message: String| {
@@ -217,7 +353,55 @@ pub fn check(problem: &Problem, trajectory: &Trajectory) -> CheckReport {
         }
     }
 
-    let mut last_origins = Vec::new();
+    if problem.links.enabled && !geometry.self_collision() {
+        let why = problem
+            .pair_table()
+            .err()
+            .map_or_else(String::new, |e| format!(": {}", e.message));
+        push(
+            1,
+            0,
+            ViolationKind::Shape,
+            format!("self-collision is on but the link capsules are invalid{why}"),
+        );
+    }
+
+    // Describes an overlap of `pair` in words.
+    let overlap = |pair: &LinkGap| {
+        let (a, b) = pair.links;
+        let (ra, rb) = (
+            problem.links.radius[a] as f64,
+            problem.links.radius[b] as f64,
+        );
+        format!(
+            "{} and {} overlap: their capsules are {:.4} {unit} into each other (chords {:.4} {unit} apart, radii {ra} + {rb})",
+            problem.link_label(a),
+            problem.link_label(b),
+            -pair.gap,
+            pair.gap + ra + rb,
+            unit = problem.length_unit,
+        )
+    };
+    let approach = |found: LinkApproach, report: &mut CheckReport| {
+        if report
+            .closest_links
+            .is_none_or(|c| found.pair.gap < c.pair.gap || found.pair.gap.is_nan())
+        {
+            report.closest_links = Some(found);
+        }
+        let collides = found.pair.gap.is_nan() || found.pair.gap < -self_tolerance;
+        if collides
+            && report
+                .worst_self_collision
+                .is_none_or(|w| found.pair.gap < w.pair.gap || found.pair.gap.is_nan())
+        {
+            report.worst_self_collision = Some(found);
+        }
+        collides
+    };
+
+    // The last finite row: its configuration, capsule gaps and step.
+    let mut previous: Option<(&[f64], Vec<f64>, u64)> = None;
     let mut last_end = None;
     for (k, row) in trajectory.rows.iter().enumerate() {
         if !row.q.iter().all(|x| x.is_finite()) || !row.h.is_finite() {
@@ -227,6 +411,7 @@ pub fn check(problem: &Problem, trajectory: &Trajectory) -> CheckReport {
                 ViolationKind::NotFinite,
                 "a joint value or the step size is not finite".into(),
             );
+            previous = None;
             continue;
         }
         for (j, (joint, &q)) in problem.joints.iter().zip(&row.q).enumerate() {
@@ -300,10 +485,62 @@ pub fn check(problem: &Problem, trajectory: &Trajectory) -> CheckReport {
             }
             true
         });
-        last_origins = origins;
+        let gaps = geometry.link_gaps(&origins);
+        if let Some(pair) = geometry.worst_gap(&gaps) {
+            let found = LinkApproach {
+                pair,
+                step: row.step,
+                between: false,
+            };
+            if approach(found, &mut report) {
+                report.self_collisions += 1;
+                let others = gaps
+                    .iter()
+                    .filter(|g| g.is_nan() || **g < -self_tolerance)
+                    .count()
+                    - 1;
+                let more = if others > 0 {
+                    format!(" (and {others} more pairs)")
+                } else {
+                    String::new()
+                };
+                push(
+                    row.line,
+                    row.step,
+                    ViolationKind::SelfCollision,
+                    format!("{}{more}", overlap(&pair)),
+                );
+            }
+        }
+        if let Some((q0, gaps0, step0)) = &previous {
+            let sweep = geometry.sweep_links(q0, &row.q, gaps0, &gaps, -self_tolerance, false);
+            report.sparse_segments += sweep.truncated as usize;
+            if let Some((pair, t)) = sweep.worst {
+                let found = LinkApproach {
+                    pair,
+                    step: row.step,
+                    between: true,
+                };
+                if approach(found, &mut report) {
+                    report.self_collisions += 1;
+                    report.self_collisions_between += 1;
+                    push(
+                        row.line,
+                        row.step,
+                        ViolationKind::SelfCollision,
+                        format!(
+                            "between steps {step0} and {} ({:.0}% of the way): {}",
+                            row.step,
+                            100.0 * t,
+                            overlap(&pair)
+                        ),
+                    );
+                }
+            }
+        }
+        previous = Some((&row.q, gaps, row.step));
         last_end = Some(end);
     }
-    let _ = last_origins;
     if let (Some(end), Some(target)) = (last_end, problem.waypoints.last()) {
         let t = target.position.map(f64::from);
         report.final_position_error =

@@ -1,8 +1,9 @@
 //! The independent `f64` model of the robot and obstacles, used by
-//! `capp check` ([`crate::check`]), the renderers ([`crate::render`]) and
-//! `capp-suite`'s checker and sampling planner.
+//! `capp check` ([`crate::check`]), the run summary, the renderers
+//! ([`crate::render`]) and `capp-suite`'s checker and sampling planner.
 //!
-//! Nothing here uses the planner's kinematics, obstacles or potential: the
+//! Nothing here uses the planner's kinematics, obstacles, potential or link
+//! capsules (only the scenario's list of checked link pairs): the
 //! forward kinematics are 4x4 `f64` products of the DH matrices (eq. 5,
 //! `A = Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha)`), and each obstacle is
 //! evaluated directly from eq. 25 in `f64`:
@@ -16,13 +17,47 @@
 //! interior link points: `link_margin`). Avoidance points are every frame
 //! origin `o_1..o_n` and `points_per_link` interior points per link.
 //!
-//! [`Geometry`] is the obstacle and avoidance-point model prepared once
-//! for repeated queries of single configurations (`capp-suite`'s sampling
-//! planner and its dense re-checks between rows use it). Sines, cosines and
-//! real powers go through `libm` and integer exponents through repeated
-//! squaring, so a clearance is the same number on every machine: case
-//! generation and certification that depend on it repeat bit for bit.
+//! Self-collision: link `k` (0-based, DH link `k + 1`) is the capsule of
+//! radius `r_k` round the chord `o_k -> o_{k+1}` (the last ends at the end
+//! effector). For every pair of links the scenario checks
+//! ([`Problem::pair_table`], the scenario's definition, as the margins are),
+//! the capsules' *gap* is
+//!
+//! ```text
+//! gap_ab = dist(chord_a, chord_b) - r_a - r_b      (length units; < 0: overlap)
+//! ```
+//!
+//! with [`segment_distance`], this module's own `f64` segment-to-segment
+//! distance (the minimum over the parameter square: the lines' common
+//! perpendicular when it meets both segments, else the best of the four
+//! endpoint-to-segment distances; no code of the planner's).
+//!
+//! Between two configurations `a`, `b` on the straight joint-space segment
+//! `q(t) = a + t (b - a)`, no point of link `k` travels farther than
+//!
+//! ```text
+//! delta_k = sum_{j <= k} |b_j - a_j| w_jk,
+//! w_jk = l_j + ... + l_k (revolute joint j),  1 (prismatic joint j)
+//! ```
+//!
+//! (`l_i` the longest chord link `i` can have: `sqrt(a_i^2 + d_i^2)`, `d_i`
+//! at its largest extension for a prismatic joint), so a pair's gap moves
+//! by at most `delta_a + delta_b` over the segment and stays at or above
+//! `(gap(a) + gap(b) - delta_a - delta_b) / 2` all along it.
+//! [`Geometry::sweep_links`] bisects the segment wherever that bound does
+//! not keep a pair apart, until neither link of such a pair moves more than
+//! [`SWEEP_FRACTION`] of the pair's smaller radius between the
+//! configurations it evaluates (at most [`SWEEP_BUDGET`] of them per
+//! segment): pairs far apart cost nothing, close ones are sampled densely.
+//!
+//! [`Geometry`] is the obstacle, avoidance-point and capsule model prepared
+//! once for repeated queries of single configurations (`capp-suite`'s
+//! sampling planner and its dense re-checks between rows use it). Sines,
+//! cosines and real powers go through `libm` and integer exponents through
+//! repeated squaring, so a clearance is the same number on every machine:
+//! case generation and certification that depend on it repeat bit for bit.
 
+use capp_core::self_collision::pairs::PairStatus;
 use capp_core::{Joint, JointKind};
 
 use crate::problem::Problem;
@@ -89,6 +124,111 @@ pub fn rotation(e: [f64; 3]) -> [[f64; 3]; 3] {
     ]
 }
 
+type V3 = [f64; 3];
+
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// `a + t (b - a)`.
+fn along(a: V3, b: V3, t: f64) -> V3 {
+    [
+        a[0] + t * (b[0] - a[0]),
+        a[1] + t * (b[1] - a[1]),
+        a[2] + t * (b[2] - a[2]),
+    ]
+}
+
+/// The parameter in `[0, 1]` of the point of segment `a -> b` nearest `p`
+/// (0 for a segment of zero length).
+fn nearest_on(p: V3, a: V3, b: V3) -> f64 {
+    let ab = sub(b, a);
+    let l2 = dot(ab, ab);
+    if l2 > 0.0 {
+        (dot(sub(p, a), ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// The distance between two segments and where it is attained.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentDistance {
+    /// The smallest distance between a point of each.
+    pub distance: f64,
+    /// Where on the first segment, `0..=1` from its start.
+    pub s: f64,
+    /// Where on the second segment, `0..=1` from its start.
+    pub t: f64,
+}
+
+/// The distance between segments `p0 -> p1` and `q0 -> q1` (either may have
+/// zero length), in `f64`.
+///
+/// `|P(s) - Q(t)|`, `P(s) = p0 + s u`, `Q(t) = q0 + t v`, is convex over the
+/// square `[0, 1]^2`, so its minimum is either inside, where `P(s) - Q(t)`
+/// is the lines' common perpendicular `n = u x v`:
+///
+/// ```text
+/// s = ((w x v) . n) / |n|^2,   t = ((w x u) . n) / |n|^2,   w = q0 - p0
+/// ```
+///
+/// (accepted when both lie in `[0, 1]`; none when the lines are parallel,
+/// whose minimum is then also on the boundary), or on an edge of the
+/// square, where one parameter is 0 or 1: an endpoint against the other
+/// segment, nearest point by clamped projection. The answer is the least of
+/// those five candidates, each an actual pair of points, so it is never
+/// below the true distance; the perpendicular's points are polished by two
+/// rounds of alternating clamped projection (each can only shorten the
+/// pair), which keeps nearly parallel segments accurate.
+pub fn segment_distance(p0: V3, p1: V3, q0: V3, q1: V3) -> SegmentDistance {
+    let pair = |s: f64, t: f64| {
+        let d = sub(along(p0, p1, s), along(q0, q1, t));
+        SegmentDistance {
+            distance: dot(d, d),
+            s,
+            t,
+        }
+    };
+    let mut best = pair(0.0, nearest_on(p0, q0, q1));
+    let mut keep = |c: SegmentDistance| {
+        if c.distance < best.distance {
+            best = c;
+        }
+    };
+    keep(pair(1.0, nearest_on(p1, q0, q1)));
+    keep(pair(nearest_on(q0, p0, p1), 0.0));
+    keep(pair(nearest_on(q1, p0, p1), 1.0));
+    let (u, v) = (sub(p1, p0), sub(q1, q0));
+    let n = cross(u, v);
+    let nn = dot(n, n);
+    if nn > 0.0 {
+        let w = sub(q0, p0);
+        let (mut s, mut t) = (dot(cross(w, v), n) / nn, dot(cross(w, u), n) / nn);
+        if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
+            for _ in 0..2 {
+                t = nearest_on(along(p0, p1, s), q0, q1);
+                s = nearest_on(along(q0, q1, t), p0, p1);
+            }
+            keep(pair(s, t));
+        }
+    }
+    best.distance = best.distance.sqrt();
+    best
+}
+
 /// An obstacle in `f64`, ready to evaluate.
 struct Shape {
     centre: [f64; 3],
@@ -144,14 +284,88 @@ pub struct Closest {
     pub obstacle: usize,
 }
 
-/// A problem's chain, obstacles and avoidance points, prepared once for
-/// clearance queries of many configurations (independent of the planner,
-/// like [`crate::check::check`]).
+/// Most configurations [`Geometry::sweep_links`] evaluates between two
+/// configurations: its work is bounded whatever the step.
+pub const SWEEP_BUDGET: usize = 4096;
+
+/// The part of the smaller capsule radius of a pair that its two links may
+/// each travel between two configurations [`Geometry::sweep_links`]
+/// evaluates, while the bound of the module docs does not keep the pair
+/// apart.
+pub const SWEEP_FRACTION: f64 = 0.25;
+
+/// The capsules' gap of one checked pair of links.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkGap {
+    /// The chords' distance less both radii, length units; negative when
+    /// the capsules overlap.
+    pub gap: f64,
+    /// The two links, 0-based (DH links `a + 1`, `b + 1`), the lower first.
+    pub links: (usize, usize),
+}
+
+/// What [`Geometry::sweep_links`] found between two configurations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sweep {
+    /// The smallest gap of a checked pair at the configurations evaluated
+    /// strictly between the two ends, and where (`t` in `(0, 1)`).
+    pub worst: Option<(LinkGap, f64)>,
+    /// Whether the motion bound proves every checked pair's gap stays at or
+    /// above the floor all along the segment.
+    pub certified: bool,
+    /// Configurations evaluated.
+    pub samples: usize,
+    /// Whether [`SWEEP_BUDGET`] ran out before the spacing was as fine as
+    /// [`SWEEP_FRACTION`] asks.
+    pub truncated: bool,
+}
+
+/// The links' capsules and the checked pairs.
+struct Links {
+    /// Capsule radius per link.
+    radius: Vec<f64>,
+    /// The checked pairs, `a < b`.
+    pairs: Vec<(usize, usize)>,
+}
+
+/// A problem's chain, obstacles, avoidance points and link capsules,
+/// prepared once for clearance queries of many configurations (independent
+/// of the planner, like [`crate::check::check`]).
 pub struct Geometry {
     joints: Vec<Joint>,
     shapes: Vec<Shape>,
     interior: usize,
     margins: [f64; 2],
+    /// `None` when self-collision is off (or the scenario's capsules are
+    /// invalid: [`Problem::validate`] refuses those).
+    links: Option<Links>,
+    /// The longest chord each link can have (`l_k` of the module docs).
+    longest: Vec<f64>,
+}
+
+impl Links {
+    fn new(problem: &Problem) -> Option<Links> {
+        if !problem.links.enabled {
+            return None;
+        }
+        let table = problem.pair_table().ok()?;
+        let n = problem.joints.len();
+        let pairs = (0..n)
+            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+            .filter(|&(a, b)| table.status(a, b) == PairStatus::Checked)
+            .collect();
+        Some(Links {
+            radius: problem.links.radius.iter().map(|&r| r as f64).collect(),
+            pairs,
+        })
+    }
+
+    /// The gap of checked pair `i` at `origins`.
+    fn gap(&self, origins: &[[f64; 3]], i: usize) -> f64 {
+        let (a, b) = self.pairs[i];
+        let d = segment_distance(origins[a], origins[a + 1], origins[b], origins[b + 1]);
+        d.distance - self.radius[a] - self.radius[b]
+    }
 }
 
 impl Geometry {
@@ -172,6 +386,18 @@ impl Geometry {
                 .collect(),
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
+            links: Links::new(problem),
+            longest: problem
+                .joints
+                .iter()
+                .map(|j| {
+                    let d = match j.kind {
+                        JointKind::Revolute => j.d.abs() as f64,
+                        JointKind::Prismatic => (j.min.abs() as f64).max(j.max.abs() as f64),
+                    };
+                    (j.a as f64).hypot(d)
+                })
+                .collect(),
         }
     }
 
@@ -239,5 +465,216 @@ impl Geometry {
             clear
         });
         clear
+    }
+
+    /// Whether self-collision is checked (the scenario enables it).
+    pub fn self_collision(&self) -> bool {
+        self.links.is_some()
+    }
+
+    /// The checked pairs of links (0-based, `a < b`); empty when
+    /// self-collision is off.
+    pub fn checked_pairs(&self) -> &[(usize, usize)] {
+        self.links.as_ref().map_or(&[], |l| &l.pairs)
+    }
+
+    /// The gap of every checked pair (in [`Geometry::checked_pairs`]'
+    /// order) of the configuration whose frame origins are `origins`.
+    pub fn link_gaps(&self, origins: &[[f64; 3]]) -> Vec<f64> {
+        match &self.links {
+            Some(l) => (0..l.pairs.len()).map(|i| l.gap(origins, i)).collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// The smallest of `gaps` (as [`Geometry::link_gaps`] gives them) and
+    /// its pair; `None` without checked pairs. NaN counts as the smallest.
+    pub fn worst_gap(&self, gaps: &[f64]) -> Option<LinkGap> {
+        let pairs = self.checked_pairs();
+        let mut worst: Option<LinkGap> = None;
+        for (&gap, &links) in gaps.iter().zip(pairs) {
+            if worst.is_none_or(|w| gap < w.gap || gap.is_nan()) {
+                worst = Some(LinkGap { gap, links });
+            }
+        }
+        worst
+    }
+
+    /// The closest checked pair of links at `q`; `None` when no pair is
+    /// checked.
+    pub fn closest_link_pair(&self, q: &[f64]) -> Option<LinkGap> {
+        self.links.as_ref()?;
+        let (origins, _) = self.forward(q);
+        self.worst_gap(&self.link_gaps(&origins))
+    }
+
+    /// Whether `q` is free: every avoidance point has `C - 1 > 0` and every
+    /// checked pair of capsules a gap `> 0` (NaN is not free).
+    pub fn is_free(&self, q: &[f64]) -> bool {
+        let (origins, _) = self.forward(q);
+        let mut clear = true;
+        self.pairs(&origins, |value, _, _| {
+            clear = value > 0.0;
+            clear
+        });
+        clear
+            && match &self.links {
+                Some(l) => (0..l.pairs.len()).all(|i| l.gap(&origins, i) > 0.0),
+                None => true,
+            }
+    }
+
+    /// Per link, a bound on how far any point of it travels along the
+    /// straight joint-space segment `a -> b` (the module docs' `delta_k`).
+    pub fn link_motion(&self, a: &[f64], b: &[f64]) -> Vec<f64> {
+        let n = self.joints.len();
+        let mut delta = vec![0.0; n];
+        for (j, joint) in self.joints.iter().enumerate() {
+            let dq = (b[j] - a[j]).abs();
+            // The lever of joint j on links j..: the chords from its pivot out.
+            let mut lever = 0.0;
+            for (k, d) in delta.iter_mut().enumerate().skip(j) {
+                lever += self.longest[k];
+                *d += dq
+                    * match joint.kind {
+                        JointKind::Revolute => lever,
+                        JointKind::Prismatic => 1.0,
+                    };
+            }
+        }
+        delta
+    }
+
+    /// The checked pairs along the straight joint-space segment `a -> b`,
+    /// whose ends have the gaps `gaps_a`, `gaps_b` ([`Geometry::link_gaps`]):
+    /// bisects wherever the motion bound (module docs) leaves a pair's gap
+    /// possibly below `floor`, until both links of every such pair move at
+    /// most [`SWEEP_FRACTION`] of the smaller radius between evaluated
+    /// configurations, or [`SWEEP_BUDGET`] configurations were evaluated.
+    /// With `certify`, stops at the first sign that the bound cannot prove
+    /// the floor (a gap evaluated below it, an interval at the finest
+    /// spacing still in doubt, the budget spent): `certified` is then false.
+    pub fn sweep_links(
+        &self,
+        a: &[f64],
+        b: &[f64],
+        gaps_a: &[f64],
+        gaps_b: &[f64],
+        floor: f64,
+        certify: bool,
+    ) -> Sweep {
+        let mut sweep = Sweep {
+            worst: None,
+            certified: true,
+            samples: 0,
+            truncated: false,
+        };
+        let Some(links) = &self.links else {
+            return sweep;
+        };
+        let delta = self.link_motion(a, b);
+        let pairs: Vec<(usize, f64, f64)> = (0..links.pairs.len())
+            .map(|i| (i, gaps_a[i], gaps_b[i]))
+            .collect();
+        let mut walk = Bisection {
+            geometry: self,
+            links,
+            a,
+            b,
+            delta: &delta,
+            floor,
+            certify,
+            sweep: &mut sweep,
+        };
+        walk.interval(0.0, 1.0, &pairs);
+        sweep
+    }
+}
+
+/// The state of one [`Geometry::sweep_links`].
+struct Bisection<'a> {
+    geometry: &'a Geometry,
+    links: &'a Links,
+    a: &'a [f64],
+    b: &'a [f64],
+    delta: &'a [f64],
+    floor: f64,
+    certify: bool,
+    sweep: &'a mut Sweep,
+}
+
+impl Bisection<'_> {
+    fn done(&self) -> bool {
+        self.certify && !self.sweep.certified
+    }
+
+    /// `(pair, gap at t0, gap at t1)` of the pairs still in doubt on `[t0, t1]`.
+    fn interval(&mut self, t0: f64, t1: f64, pairs: &[(usize, f64, f64)]) {
+        let span = t1 - t0;
+        let (mut doubt, mut coarse) = (Vec::new(), false);
+        for &(i, g0, g1) in pairs {
+            let (a, b) = self.links.pairs[i];
+            let (da, db) = (self.delta[a] * span, self.delta[b] * span);
+            // NaN never proves anything: it stays in doubt.
+            if 0.5 * (g0 + g1 - da - db) >= self.floor {
+                continue;
+            }
+            let fine = SWEEP_FRACTION * self.links.radius[a].min(self.links.radius[b]);
+            coarse |= da > fine || db > fine;
+            doubt.push((i, g0, g1));
+        }
+        if doubt.is_empty() {
+            return;
+        }
+        if !coarse {
+            // As fine as asked, and the bound still cannot prove the floor.
+            self.sweep.certified = false;
+            return;
+        }
+        if self.sweep.samples >= SWEEP_BUDGET {
+            self.sweep.truncated = true;
+            self.sweep.certified = false;
+            return;
+        }
+        let tm = 0.5 * (t0 + t1);
+        let q: Vec<f64> = self
+            .a
+            .iter()
+            .zip(self.b)
+            .map(|(x, y)| x + tm * (y - x))
+            .collect();
+        let (origins, _) = self.geometry.forward(&q);
+        self.sweep.samples += 1;
+        let mut left = Vec::with_capacity(doubt.len());
+        let mut right = Vec::with_capacity(doubt.len());
+        for &(i, g0, g1) in &doubt {
+            let gm = self.links.gap(&origins, i);
+            if self
+                .sweep
+                .worst
+                .is_none_or(|(w, _)| gm < w.gap || gm.is_nan())
+            {
+                self.sweep.worst = Some((
+                    LinkGap {
+                        gap: gm,
+                        links: self.links.pairs[i],
+                    },
+                    tm,
+                ));
+            }
+            if gm.is_nan() || gm < self.floor {
+                self.sweep.certified = false;
+            }
+            left.push((i, g0, gm));
+            right.push((i, gm, g1));
+        }
+        if self.done() {
+            return;
+        }
+        self.interval(t0, tm, &left);
+        if self.done() {
+            return;
+        }
+        self.interval(tm, t1, &right);
     }
 }

@@ -18,8 +18,8 @@
 //! | [`output`] | the output folder: CSVs, `joints.dat`, summary, written atomically |
 //! | [`output::summary`] | the run summary text (stdout and `summary.txt`) |
 //! | [`trajectory`] | reading a trajectory CSV back |
-//! | [`geometry`] | the independent f64 model of the robot and obstacles (own kinematics, own super-ellipsoids), used by [`check`], [`render`] and the suite |
-//! | [`check`] | the independent trajectory checker, on [`geometry`] |
+//! | [`geometry`] | the independent f64 model of the robot, obstacles and link capsules (own kinematics, own super-ellipsoids, own segment distance), used by [`check`], the summary, [`render`] and the suite |
+//! | [`check`] | the independent trajectory checker (limits, rates, kinematics, clearance, self-collision), on [`geometry`] |
 //! | [`render`] | SVG/PNG pictures with text, the 3-D `viewer.html`, `motion.gif`, report charts |
 //! | [`serial`] | `capp serial`: upload to a board, receive its stream, account for every setpoint |
 //! | [`cli`] | the `capp` command line |

@@ -1,7 +1,8 @@
 //! The shipped scenarios run end to end, reach their targets (the dead end
 //! stalls; the escape scenario reaches only by escaping), and the independent checker accepts their trajectories; the
 //! legacy `input.dat` and its TOML twin give the same trajectory; the checker
-//! rejects trajectories made to collide or to break a limit.
+//! rejects trajectories made to collide or to break a limit
+//! (`self_collision.rs`: to pass one link through another).
 
 use std::path::{Path, PathBuf};
 
@@ -36,6 +37,9 @@ fn runs_and_checks(name: &str, expected: Outcome) -> (Problem, Trajectory) {
     let t = as_trajectory(&problem, &result);
     let report = check::check(&problem, &t);
     assert!(report.accepted(), "{name}: {report}");
+    // Self-collision is on in every shipped scenario, and checked.
+    assert!(report.self_checked, "{name}: {report}");
+    assert_eq!(report.self_collisions, 0, "{name}: {report}");
     assert_eq!(
         report.reaches_target,
         expected == Outcome::Reached,
@@ -51,7 +55,15 @@ fn pips_free_space_reaches() {
 
 #[test]
 fn pips_payload_bay_reaches_around_the_payload() {
-    let (_, t) = runs_and_checks("pips_payload_bay.toml", Outcome::Reached);
+    let (problem, t) = runs_and_checks("pips_payload_bay.toml", Outcome::Reached);
+    // PIPS checks pairs of links, and the checker names the closest.
+    let report = check::check(&problem, &t);
+    let closest = report.closest_links.expect("checked link pairs");
+    assert!(closest.pair.gap > 0.0, "{report}");
+    assert!(
+        report.to_string().contains("closest link pair: links"),
+        "{report}"
+    );
     // The payload actually constrains the path.
     let closest = t
         .rows

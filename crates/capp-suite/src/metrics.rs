@@ -4,7 +4,11 @@
 //! kinematics, clearance), and so is the straight joint-space segment between
 //! consecutive rows, at points no more than [`DENSE_STEP`] apart in any joint,
 //! so a step that jumps through an obstacle is counted even if both its ends
-//! are clear.
+//! are clear. Self-collisions (two checked link capsules overlapping) are
+//! `capp check`'s own count, on every row and densely between rows
+//! ([`capp_sim::geometry::Geometry::sweep_links`]: no link moving more than a
+//! quarter of its capsule radius between checks wherever a pair may come
+//! near), one per row or segment between rows.
 //!
 //! Times: `motion_time` is the sum of the step sizes `h`; `same_path_time`
 //! the same path driven at the joints' rate limits, `sum_k max_j |dq_j| /
@@ -127,6 +131,15 @@ pub struct RunMetrics {
     pub collisions: usize,
     /// Of those, how many were between rows.
     pub collisions_between: usize,
+    /// Rows and segments between rows where two checked link capsules
+    /// overlap (`capp check`'s [`ViolationKind::SelfCollision`]).
+    pub self_collisions: usize,
+    /// Of those, segments between rows.
+    pub self_collisions_between: usize,
+    /// The smallest gap of a checked pair of link capsules (length units;
+    /// negative: overlap) over the rows and the configurations checked
+    /// between them; `None` without self-collision checks.
+    pub closest_links: Option<f64>,
     /// Checked configurations touching an inflated surface within rounding
     /// (`-ROUNDING < C - 1 <= 0`; `capp check`'s exact test counts these too).
     pub contacts: usize,
@@ -155,7 +168,12 @@ impl RunMetrics {
     /// Violations of every kind that must never happen (contacts within
     /// rounding are not among them; see [`ROUNDING`]).
     pub fn violations(&self) -> usize {
-        self.collisions + self.not_finite + self.joint_limit + self.rate_limit + self.other
+        self.collisions
+            + self.self_collisions
+            + self.not_finite
+            + self.joint_limit
+            + self.rate_limit
+            + self.other
     }
 }
 
@@ -204,9 +222,9 @@ pub fn between(a: &[f64], b: &[f64], mut f: impl FnMut(&[f64]) -> bool) -> usize
 /// Measures `result`, a run of `problem`.
 pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
     let trajectory = Trajectory::from_rows(&result.rows);
-    let report = check::check(problem, &trajectory);
-    let count = |kind| report.violations.iter().filter(|v| v.kind == kind).count();
     let geometry = Geometry::new(problem);
+    let report = check::check_with(problem, &geometry, &trajectory);
+    let count = |kind| report.violations.iter().filter(|v| v.kind == kind).count();
     let rates = rates(problem);
     let rows: Vec<Vec<f64>> = trajectory.rows.iter().map(|r| r.q.clone()).collect();
 
@@ -278,6 +296,9 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         closest,
         collisions: collision_rows + collisions_between,
         collisions_between,
+        self_collisions: count(ViolationKind::SelfCollision),
+        self_collisions_between: report.self_collisions_between,
+        closest_links: report.closest_links.map(|c| c.pair.gap),
         contacts,
         not_finite: count(ViolationKind::NotFinite),
         joint_limit: count(ViolationKind::JointLimit),

@@ -9,10 +9,18 @@
 //!   of the diagonal of the joint box), `max_j |dq_j| / rate_j` for the
 //!   reported path time.
 //! * Every edge is checked densely: no joint moves more than
-//!   [`DENSE_STEP`](crate::metrics::DENSE_STEP) (0.01 rad or length unit)
+//!   [`DENSE_STEP`] (0.01 rad or length unit)
 //!   between checked configurations (coarse-to-fine order, so a blocked edge
 //!   is found early); a configuration is free when every avoidance point has
-//!   `C - 1 > 0` with the problem's margins.
+//!   `C - 1 > 0` with the problem's margins and, when the scenario checks
+//!   self-collision, every checked pair of link capsules a gap `> 0`.
+//! * Self-collision along an edge is certified, not sampled: the links'
+//!   motion bound ([`capp_sim::geometry`]) must prove every checked pair
+//!   apart all along it, from the gaps at configurations bisected until the
+//!   links move no more than a quarter of a capsule radius between them
+//!   ([`Geometry::sweep_links`] with floor 0); an edge it cannot prove is
+//!   refused (a pair passing within about a quarter radius of contact may be
+//!   refused too), so no case is certified through a self-colliding path.
 //! * Budget: a number of iterations, never a time, so a run repeats exactly on
 //!   any machine. A case whose trees do not meet within it is *not certified*.
 //! * The found path is re-checked densely, then shortened by random partial
@@ -95,21 +103,44 @@ impl Space {
         }
     }
 
-    /// Whether `q` is within limits and every point is outside every inflated obstacle.
-    pub fn free(&mut self, q: &[f64]) -> bool {
-        self.checks += 1;
+    fn within_limits(&self, q: &[f64]) -> bool {
         q.iter()
             .zip(self.lo.iter().zip(&self.hi))
             .all(|(x, (lo, hi))| x >= lo && x <= hi)
-            && self.geometry.is_clear(q, 0.0)
     }
 
-    /// Whether the straight segment `a` -> `b` is free: `b` and every point
-    /// between at most [`DENSE_STEP`] apart per joint (`a` is taken as checked).
+    /// Whether `q` is within limits, every point is outside every inflated
+    /// obstacle and no two checked link capsules touch.
+    pub fn free(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        self.within_limits(q) && self.geometry.is_free(q)
+    }
+
+    /// Whether the straight segment `a` -> `b` is free: `b`, and every point
+    /// between at most [`DENSE_STEP`] apart per joint clear of the
+    /// obstacles, and the link capsules proved apart all along it (`a` is
+    /// taken as checked).
     pub fn segment_free(&mut self, a: &[f64], b: &[f64]) -> bool {
         if !self.free(b) {
             return false;
         }
+        if !self.obstacles_free(a, b) {
+            return false;
+        }
+        if !self.geometry.self_collision() {
+            return true;
+        }
+        let (gaps_a, gaps_b) = (
+            self.geometry.link_gaps(&self.geometry.forward(a).0),
+            self.geometry.link_gaps(&self.geometry.forward(b).0),
+        );
+        let sweep = self.geometry.sweep_links(a, b, &gaps_a, &gaps_b, 0.0, true);
+        self.checks += sweep.samples;
+        sweep.certified
+    }
+
+    /// The obstacle part of [`Space::segment_free`], between the ends.
+    fn obstacles_free(&mut self, a: &[f64], b: &[f64]) -> bool {
         let d = a
             .iter()
             .zip(b)
@@ -129,7 +160,8 @@ impl Space {
                 for (k, v) in q.iter_mut().enumerate() {
                     *v = a[k] + t * (b[k] - a[k]);
                 }
-                if !self.free(&q) {
+                self.checks += 1;
+                if !(self.within_limits(&q) && self.geometry.is_clear(&q, 0.0)) {
                     return false;
                 }
                 i += 2 * s;

@@ -147,6 +147,8 @@ impl<'a> Tally<'a> {
         let reached = self.count(Outcome::Reached);
         let reached_certified = self.reached().filter(|(c, _)| certified(c)).count();
         let collisions: usize = self.runs.iter().map(|(_, m)| m.collisions).sum();
+        let self_collisions: usize = self.runs.iter().map(|(_, m)| m.self_collisions).sum();
+        let self_checked = self.runs.iter().any(|(_, m)| m.closest_links.is_some());
         let contacts: usize = self.runs.iter().map(|(_, m)| m.contacts).sum();
         let broken: usize = self
             .runs
@@ -176,7 +178,7 @@ impl<'a> Tally<'a> {
             String::new()
         };
         format!(
-            "| {lead} | {}{errors} | {} | {}{unconfirmed} | {} | {} | {} | {}{} | {} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
+            "| {lead} | {}{errors} | {} | {}{unconfirmed} | {} | {} | {} | {}{} | {} | {} | {} / {} / {} | {} | {} | {} | {} | {} / {} | {} |",
             self.cases,
             self.certified,
             reached,
@@ -185,6 +187,7 @@ impl<'a> Tally<'a> {
             pct(reached_certified, self.certified),
             collisions,
             if broken > 0 { format!(" (+{broken} limit/NaN)") } else { String::new() },
+            if self_checked { self_collisions.to_string() } else { "off".into() },
             contacts,
             opt_int(median(&steps)),
             opt_int(percentile(&steps, 0.9)),
@@ -278,8 +281,8 @@ impl Tally<'_> {
 const ESCAPE_HEAD: &str = "| runs | escaped (any attempt) | escaped and reached | attempts of those, median / max | their motion time, median (s) | RRT shortcut path on the same cases, median (s) | motion / RRT: ratio of the medians | motion / RRT: median of the ratios | ended by the return (attempts spent) | detours: sides taken | walks: sides taken | searched paths: sides taken |";
 const ESCAPE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|";
 
-const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | contacts within rounding | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
-const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+const TABLE_HEAD: &str = "| cases | RRT-certified | reached | stalled | capped | reached % of certified | collisions | self-collisions | contacts within rounding | steps median / p90 / max | motion time median (s) | motion / same path at rate limits | motion / straight line at rate limits | motion / RRT path | steps 10x tol -> tol median / max | wall ms per run median |";
+const TABLE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 fn ratio(a: f64, b: f64) -> Option<f64> {
     (b > 0.0 && a.is_finite()).then(|| a / b)
@@ -361,9 +364,13 @@ pub fn markdown_with_figures(
          (`capp-core`, `Planner<32>`); `cargo xtask suite --write-cases DIR` writes them, \
          and every run that did not reach its target is written to `target/suite/cases/` \
          with its variant's settings, so `capp run target/suite/cases/NAME.toml` reproduces it. \
-         Collisions, NaN, joint and rate limits are counted by the independent `f64` checker \
-         (`capp_sim::check`), on every row and densely between rows (no joint moving more than \
-         0.01 rad or 0.01 length units between checks), never by the planner's own flags. \
+         Collisions, self-collisions, NaN, joint and rate limits are counted by the independent \
+         `f64` checker (`capp_sim::check`), on every row and densely between rows (no joint moving \
+         more than 0.01 rad or 0.01 length units between obstacle checks; wherever two checked \
+         link capsules may come near, no link moving more than a quarter of its capsule radius \
+         between capsule checks), never by the planner's own flags. *Self-collisions*: rows and \
+         segments between rows where two checked link capsules (`capp acm`) overlap by more than \
+         `f32` rounding (`off`: the cases do not check self-collision). \
          Per-case figures: `target/suite/results.csv`.\n\n",
     );
     s.push_str("Families:\n\n");
@@ -594,7 +601,7 @@ pub fn markdown_with_figures(
             if let Ok(m) = &v.metrics {
                 if m.violations() > 0 || m.contacts > 0 {
                     unsafe_runs.push(format!(
-                        "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                        "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                         r.case.name,
                         v.variant.name,
                         capp_sim::output::summary::outcome_name(m.outcome),
@@ -602,6 +609,9 @@ pub fn markdown_with_figures(
                         m.collisions_between,
                         m.contacts,
                         m.closest.map_or("-".into(), |c| format!("{c:.2e}")),
+                        m.self_collisions - m.self_collisions_between,
+                        m.self_collisions_between,
+                        m.closest_links.map_or("-".into(), |g| format!("{g:.3}")),
                         m.not_finite + m.joint_limit + m.rate_limit,
                         m.other
                     ));
@@ -611,7 +621,7 @@ pub fn markdown_with_figures(
     }
     s.push_str("\n## Runs the checker rejects\n\n");
     if unsafe_runs.is_empty() {
-        s.push_str("None: no collision or contact (rows or between rows), NaN, joint- or rate-limit violation in any run.\n");
+        s.push_str("None: no collision, self-collision or contact (rows or between rows), NaN, joint- or rate-limit violation in any run.\n");
     } else {
         let _ = writeln!(
             s,
@@ -621,10 +631,13 @@ pub fn markdown_with_figures(
              inside (the step jumped through an edge or a corner); *contacts*: configurations with \
              `-1e-4 < C - 1 <= 0`, on the inflated surface within what the planner's `f32` arithmetic \
              decides (`capp check`'s exact test rejects them too; the margins, 3 to 6 in for PIPS, \
-             are what keeps the arm off the real surface); *closest*: the smallest `C - 1` seen.\n",
+             are what keeps the arm off the real surface); *closest*: the smallest `C - 1` seen; \
+             *self-collisions at rows* / *between rows*: rows and segments between rows where two \
+             checked link capsules overlap; *closest link gap*: the smallest gap between checked \
+             capsules seen (length units, negative: overlap).\n",
             unsafe_runs.len()
         );
-        s.push_str("| case | variant | outcome | collisions at rows | collisions between rows | contacts within rounding | closest C - 1 | limit / NaN violations | other |\n|---|---|---|---|---|---|---|---|---|\n");
+        s.push_str("| case | variant | outcome | collisions at rows | collisions between rows | contacts within rounding | closest C - 1 | self-collisions at rows | self-collisions between rows | closest link gap | limit / NaN violations | other |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for line in unsafe_runs {
             let _ = writeln!(s, "{line}");
         }
@@ -722,7 +735,7 @@ fn escape_sides(e: &crate::metrics::EscapeCounts) -> String {
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,self_collisions,closest_link_gap,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
     // A refused file: every measurement column empty (all but the case's 4,
@@ -751,7 +764,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
                         capp_sim::output::summary::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -765,6 +778,8 @@ pub fn csv(results: &[CaseResult]) -> String {
                         m.collisions,
                         m.collisions_between,
                         m.contacts,
+                        m.self_collisions,
+                        o(m.closest_links),
                         m.not_finite,
                         m.joint_limit,
                         m.rate_limit,

@@ -122,7 +122,10 @@ fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
             "{} ({}): {:?} after {} steps",
             c.name, c.tags, m.outcome, m.steps
         );
-        eprintln!("{what} dense {} closest {:?}", m.dense_checks, m.closest);
+        eprintln!(
+            "{what} dense {} closest {:?} closest link gap {:?}",
+            m.dense_checks, m.closest, m.closest_links
+        );
         assert!(m.steps <= CAP, "{what}");
         assert!(
             m.outcome == Outcome::Reached || m.steps >= problem.settings.stall_window.min(CAP),
@@ -133,6 +136,12 @@ fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
             "{what}: collisions ({} between rows), closest {:?}",
             m.collisions_between, m.closest
         );
+        assert_eq!(
+            m.self_collisions, 0,
+            "{what}: self-collisions ({} between rows), closest link gap {:?}",
+            m.self_collisions_between, m.closest_links
+        );
+        assert!(m.closest_links.is_some(), "{what}: link pairs are checked");
         assert_eq!(m.not_finite, 0, "{what}");
         assert_eq!(m.joint_limit, 0, "{what}");
         assert_eq!(m.rate_limit, 0, "{what}");
@@ -162,11 +171,14 @@ fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
     }
 }
 
-/// An independent re-check of a path, finer than the oracle's own.
+/// An independent re-check of a path, finer than the oracle's own (the
+/// link capsules sampled as the obstacles are, not by the motion bound).
 fn path_is_free(problem: &capp_sim::Problem, path: &[Vec<f64>]) -> bool {
     let geometry = Geometry::new(problem);
     let clear = |q: &[f64]| {
-        within_limits(problem, q) && geometry.clearance(q).is_none_or(|c| c.value > 0.0)
+        within_limits(problem, q)
+            && geometry.clearance(q).is_none_or(|c| c.value > 0.0)
+            && geometry.closest_link_pair(q).is_none_or(|c| c.gap > 0.0)
     };
     path.iter().all(|q| clear(q))
         && path.windows(2).all(|w| {
@@ -254,6 +266,77 @@ fn a_step_through_an_obstacle_counts_as_a_collision() {
     let mut space = oracle::Space::new(&problem);
     assert!(!space.segment_free(&a, &b));
     assert!(space.segment_free(&a, &[0.3]));
+}
+
+/// A planar arm of four 1 m links, capsules of radius 0.1 m, the elbow
+/// folded 2.6 rad back: link 3 lies along -x, 0.52 m above link 1.
+/// Turning joint 3 by pi swings it down through link 1 and up again.
+const FOLD: &str = "name = \"fold\"\nstart = [0.0, 2.6, 0.5415927, 0.0]\n\
+    [units]\nangle = \"radians\"\nlength = \"metres\"\n\
+    [robot]\nlink_radius = 0.1\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 1.0\nmin = -6.0\nmax = 6.0\nmax_rate = 100.0\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 1.0\nmin = -6.0\nmax = 6.0\nmax_rate = 100.0\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 1.0\nmin = -6.0\nmax = 6.0\nmax_rate = 100.0\n\
+    [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 1.0\nmin = -6.0\nmax = 6.0\nmax_rate = 100.0\n\
+    [target]\nposition = [2.0, 1.0, 0.0]\n";
+
+#[test]
+fn a_step_through_a_link_is_a_self_collision_and_the_oracle_refuses_it() {
+    use capp_sim::plan::{Row, RunResult};
+    let problem = case::parse(FOLD, "fold").unwrap();
+    problem.validate().unwrap();
+    let a: Vec<f64> = problem.start.iter().map(|&x| x as f64).collect();
+    let mut b = a.clone();
+    b[2] += std::f64::consts::PI;
+    let mut down = a.clone();
+    down[2] += std::f64::consts::FRAC_PI_2;
+
+    // The oracle: both ends free, the swing between them not; link 3
+    // pointing down through link 1 is not free.
+    let mut space = oracle::Space::new(&problem);
+    assert!(space.free(&a) && space.free(&b));
+    assert!(!space.free(&down));
+    assert!(!space.segment_free(&a, &b));
+    let mut short = a.clone();
+    short[2] += 0.3;
+    assert!(space.segment_free(&a, &short));
+    let r = oracle::rrt_connect(&problem, &a, &b, Budget::default(), &mut Rng::new(1));
+    if r.solved {
+        // Round the other way (joint 3 turning by -pi keeps link 3 above link 1).
+        assert!(path_is_free(&problem, &r.path));
+    }
+
+    // The checker: two clear rows, one self-collision between them.
+    let row = |step: u32, q: &[f64]| Row {
+        step,
+        h: if step == 0 { 0.0 } else { 0.05 },
+        q: q.iter().map(|&x| x as f32).collect(),
+        position: [0.0; 3],
+        rotation: [[0.0; 3]; 3],
+        v: 0.0,
+        position_error: 0.0,
+        orientation_error: 0.0,
+        clearance: None,
+        waypoint: 0,
+        constrained: None,
+        halvings: None,
+        escape: None,
+        setpoint: true,
+    };
+    let result = RunResult {
+        rows: vec![row(0, &a), row(1, &b)],
+        outcome: Outcome::Stalled,
+        wall_time: std::time::Duration::ZERO,
+    };
+    let m = metrics::measure(&problem, &result);
+    assert_eq!(
+        (m.self_collisions, m.self_collisions_between),
+        (1, 1),
+        "{m:?}"
+    );
+    assert!(m.closest_links.is_some_and(|g| g < -0.1), "{m:?}");
+    assert_eq!(m.collisions, 0);
+    assert!(m.violations() >= 1);
 }
 
 /// The defect the suite found first (a step accepted by its end
@@ -400,6 +483,9 @@ fn the_csv_has_every_column_on_every_row_and_the_figures_draw() {
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
     for column in [
+        "self_collisions",
+        "closest_link_gap",
+        "trajectory_bits",
         "escape_attempts",
         "escape_walks",
         "escape_detours",

@@ -1,14 +1,18 @@
 //! The run summary: the numbers a person wants after a run, printed on stdout
 //! by `capp run` / `capp serial` and written as `summary.txt` into the output
 //! folder ([`super::write_run`]): outcome, steps, final errors, the smallest
-//! clearance, joint range use, the dead-end escapes told in words, setpoints,
-//! wall time and, for a plan received from a board, what happened on the line.
+//! clearance, the closest pair of link capsules (when the scenario checks
+//! self-collision; over the rows, by the independent model of
+//! [`crate::geometry`]), joint range use, the dead-end escapes told in words,
+//! setpoints, wall time and, for a plan received from a board, what happened
+//! on the line.
 
 use std::fmt;
 
 use capp_core::Outcome;
 
 use crate::escapes::{self, Kind, Stretch};
+use crate::geometry::{Geometry, LinkGap};
 use crate::plan::RunResult;
 use crate::problem::Problem;
 
@@ -38,6 +42,9 @@ pub struct Summary {
     pub orientation_error: Option<(f32, f32)>,
     /// Smallest clearance `C - 1` seen: value, step, point description, obstacle label.
     pub min_clearance: Option<(f32, u32, String, String)>,
+    /// The closest pair of checked link capsules over the rows and its
+    /// step (`None`: self-collision off; `Some(None)`: no pair checked).
+    pub closest_links: Option<Option<(LinkGap, u32)>>,
     /// Largest `|f_i|` (eq. 18: 1 at a limit) over all steps: value, joint label.
     pub range_use: (f32, String),
     /// Setpoints written.
@@ -361,6 +368,19 @@ impl Summary {
                     ),
                 )
             });
+        let closest_links = problem.links.enabled.then(|| {
+            let geometry = Geometry::new(problem);
+            let mut closest: Option<(LinkGap, u32)> = None;
+            for r in &result.rows {
+                let q: Vec<f64> = r.q.iter().map(|&x| x as f64).collect();
+                if let Some(pair) = geometry.closest_link_pair(&q) {
+                    if closest.is_none_or(|(c, _)| pair.gap < c.gap || pair.gap.is_nan()) {
+                        closest = Some((pair, r.step));
+                    }
+                }
+            }
+            closest
+        });
         let mut range_use = (0.0f32, String::from("-"));
         for r in &result.rows {
             for (j, (joint, &q)) in problem.joints.iter().zip(&r.q).enumerate() {
@@ -383,6 +403,7 @@ impl Summary {
                 )
             }),
             min_clearance,
+            closest_links,
             range_use,
             setpoints: result.setpoints().count(),
             wall_time_s: result.wall_time.as_secs_f64(),
@@ -417,6 +438,34 @@ impl fmt::Display for Summary {
                 "minimum clearance: C-1 = {v:.4} at step {step}: {point}, {obstacle}"
             )?,
             None => writeln!(f, "minimum clearance: no obstacle ever within influence")?,
+        }
+        match self.closest_links {
+            None => {}
+            Some(None) => writeln!(f, "closest link pair: none (no pair of links is checked)")?,
+            Some(Some((pair, step))) => {
+                let (a, b, unit) = (pair.links.0 + 1, pair.links.1 + 1, &self.unit);
+                // Two decimals, four near contact.
+                let length = |v: f64| {
+                    if v.abs() >= 0.1 {
+                        format!("{v:.2}")
+                    } else {
+                        format!("{v:.4}")
+                    }
+                };
+                if pair.gap >= 0.0 {
+                    writeln!(
+                        f,
+                        "closest link pair: links {a} and {b}, {} {unit} apart (capsules) at step {step}",
+                        length(pair.gap)
+                    )?
+                } else {
+                    writeln!(
+                        f,
+                        "closest link pair: links {a} and {b}, capsules overlap by {} {unit} at step {step}",
+                        length(-pair.gap)
+                    )?
+                }
+            }
         }
         writeln!(
             f,
