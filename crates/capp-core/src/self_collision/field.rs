@@ -4,7 +4,7 @@
 //!
 //! For a pair of links `a`, `b` with closest chord points `p_a` (fraction
 //! `s` along link `a`) and `p_b` (fraction `t`), `d = |p_a - p_b|`, the gap
-//! `g = d - r_a - r_b` and the clearance `c = g / l`, `l = r_a + r_b`:
+//! `g = d - r_a - r_b` and the clearance `c = g / l`, `l = CLEARANCE_SCALE (r_a + r_b)`:
 //!
 //! ```text
 //! P_ab = 1 / c                                    (eq. 26's shape, c for C - 1)
@@ -20,13 +20,13 @@
 //!
 //! Conservative advancement: a pair is safe for a step when the two links'
 //! travel bounds add up to at most `fraction` of its gap. Each link gets
-//! half the gap of each close pair, and `INFLUENCE r_k` against the pairs
-//! the broad phase found farther than `INFLUENCE (r_a + r_b)`: any two
+//! half the gap of each close pair, and `k r_k` against the pairs the broad
+//! phase found farther than `k (r_a + r_b)`, `k = INFLUENCE CLEARANCE_SCALE`: any two
 //! links' shares then add up to at most their gap. The shares go into the
 //! same per-link room the obstacles use ([`crate::step_size::advancement`]).
 
 use super::segment::closest_points;
-use super::{LinkCapsules, INFLUENCE};
+use super::{LinkCapsules, CLEARANCE_SCALE, INFLUENCE};
 use crate::kinematics::Frames;
 use crate::math::{max, min, Vec3};
 use crate::robot::{JointKind, Robot};
@@ -35,7 +35,7 @@ use crate::robot::{JointKind, Robot};
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LinkPair {
-    /// `c = gap / (r_a + r_b)`: > 0 apart, dimensionless (as `C - 1`).
+    /// `c = gap / (CLEARANCE_SCALE (r_a + r_b))`: > 0 apart, dimensionless (as `C - 1`).
     pub clearance: f32,
     /// The capsules' distance (chords' distance less both radii), length
     /// units; negative when they overlap.
@@ -118,7 +118,7 @@ pub fn link_pairs<const N: usize>(
             else {
                 continue;
             };
-            // Broad phase: spheres round both capsules inflated by INFLUENCE radii.
+            // Broad phase: spheres round both capsules inflated by INFLUENCE clearance units.
             let reach = reach_a + reach_b;
             if (m_a - m_b).norm_squared() >= reach * reach || b >= n {
                 continue;
@@ -132,7 +132,8 @@ pub fn link_pairs<const N: usize>(
             let distance = libm::sqrtf(pair.distance_sq);
             let radii = r_a + r_b;
             let gap = distance - radii;
-            let c = gap / radii;
+            let scale = CLEARANCE_SCALE * radii;
+            let c = gap / scale;
             let share = 0.5 * max(gap, 0.0);
             for k in [a, b] {
                 if let Some(room) = room_sq.get_mut(k) {
@@ -159,7 +160,7 @@ pub fn link_pairs<const N: usize>(
             }
             field.active_pairs = field.active_pairs.saturating_add(1);
             field.potential += 1.0 / c;
-            let f_a = (pair.on_first - pair.on_second) * (-1.0 / (c * c * radii * distance));
+            let f_a = (pair.on_first - pair.on_second) * (-1.0 / (c * c * scale * distance));
             force[a] += f_a;
             sliding[a] += f_a * pair.s;
             if let (Some(fb), Some(sb)) = (force.get_mut(b), sliding.get_mut(b)) {

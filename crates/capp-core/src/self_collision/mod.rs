@@ -17,8 +17,9 @@
 //!   bounding sphere per link) settles most pairs in one comparison.
 //!
 //! The clearance of a pair is dimensionless, as the obstacles' `C - 1` is:
-//! `c = gap / (r_a + r_b)`, so the projection (eq. 24) engages for a link pair
-//! at `c < 2 engage_clearance` as it does for an obstacle, and the potential
+//! `c = gap / (CLEARANCE_SCALE (r_a + r_b))`, so the projection (eq. 24)
+//! engages for a link pair at `c < 2 engage_clearance` as it does for an
+//! obstacle, and the potential
 //! term `1 / c` has the shape of eq. 26's `1 / (C - 1)`.
 
 pub mod field;
@@ -33,14 +34,22 @@ use crate::robot::{JointKind, Robot, MAX_LENGTH};
 pub const MAX_LINKS: usize = 64;
 
 /// Link pairs are in the potential (and narrow-phase tested) while their
-/// clearance `c = gap / (r_a + r_b)` is below this; beyond it a pair is at
-/// least this many radius sums apart, which is all conservative advancement
+/// clearance `c` is below this; beyond it a pair is at
+/// least this many clearance units (`CLEARANCE_SCALE` radius sums) apart, which is all conservative advancement
 /// needs to know of it. 2 is the band where the projection engages with the
 /// default `engage_clearance` (1: engaged below `c = 2`). A wider band
 /// (4 was tried) keeps the truss's links two apart (9 in apart at PIPS
 /// home, structurally) in the potential all the time: a constant push in
 /// `mu` that only tilts the projection, and twice the narrow-phase tests.
 pub const INFLUENCE: f32 = 2.0;
+
+/// A link pair's clearance is its gap in units of this fraction of the
+/// two radii: `c = gap / (CLEARANCE_SCALE (r_a + r_b))`. With 0.5 the
+/// projection engages (`c < 2`) once two capsules are closer than the sum
+/// of their radii (PIPS: 3 in) and in full below half of it; with 1 (the
+/// first choice) the arm kept 3 in from itself while travelling and some
+/// payload-bay targets next to the pedestal were no longer reached.
+pub const CLEARANCE_SCALE: f32 = 0.5;
 
 /// Why link capsules were rejected. `link` is 0-based (DH link `link + 1`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,10 +113,10 @@ pub struct LinkCapsules<const N: usize> {
     radius: [f32; N],
     /// Per link, the radius of the sphere round its chord's mid-point that
     /// holds its capsule inflated by [`INFLUENCE`] radii in every
-    /// configuration: half its longest chord plus `(1 + INFLUENCE) r`.
+    /// configuration: half its longest chord plus `(1 + INFLUENCE CLEARANCE_SCALE) r`.
     reach: [f32; N],
     /// Per link, the room it may use in one step against the pairs too far
-    /// apart to be tested: `INFLUENCE r` (infinity when it has no checked pair).
+    /// apart to be tested: `INFLUENCE CLEARANCE_SCALE r` (infinity when it has no checked pair).
     far_room: [f32; N],
     /// Row `a`: bit `b` set (`b > a`) when the pair `(a, b)` is checked.
     checked: [u64; N],
@@ -175,7 +184,7 @@ impl<const N: usize> LinkCapsules<N> {
                 }
             };
             *radius = r;
-            *reach = 0.5 * longest + (1.0 + INFLUENCE) * r;
+            *reach = 0.5 * longest + (1.0 + INFLUENCE * CLEARANCE_SCALE) * r;
             *checked = row;
         }
         capsules.n = n;
@@ -193,7 +202,7 @@ impl<const N: usize> LinkCapsules<N> {
             .enumerate()
         {
             if a < 64 && paired & (1u64 << a) != 0 {
-                *room = INFLUENCE * r;
+                *room = INFLUENCE * CLEARANCE_SCALE * r;
             }
         }
         Ok(capsules)
