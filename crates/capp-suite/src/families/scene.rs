@@ -1,7 +1,14 @@
 //! What every family does the same way: a draft scene with its independent
 //! geometry, random configurations within limits and clear of it, obstacles
 //! placed in the way, and the finished, re-read and validated case file.
+//!
+//! A family may also ask that its configurations keep the links apart
+//! ([`Draft::keep_links_apart`]): then "clear" also means that every pair of
+//! links the scenario checks (its allowed-collision matrix, as `capp acm`
+//! prints it) keeps its capsules `gap >= margin (r_a + r_b)` apart, by an
+//! `f64` segment-to-segment distance of its own ([`segment_distance`]).
 
+use capp_core::self_collision::pairs::PairStatus;
 use capp_core::SuperEllipsoid;
 use capp_sim::geometry::{forward, Geometry};
 use capp_sim::Problem;
@@ -21,6 +28,70 @@ pub struct Draft {
     pub spec: Spec,
     problem: Problem,
     geometry: Geometry,
+    /// Self-collision of starts and goals, when the family asks for it.
+    links: Option<(LinkPairs, f64)>,
+}
+
+/// The pairs of links a scenario checks (its allowed-collision matrix, as
+/// `capp acm` prints it) and their capsules, read independently of the
+/// planner: `f64` chords from the checker's kinematics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinkPairs {
+    /// Checked pairs `(a, b)`, 0-based links, `a < b`.
+    pub pairs: Vec<(usize, usize)>,
+    /// Capsule radius per link.
+    pub radius: Vec<f64>,
+}
+
+impl LinkPairs {
+    /// The checked pairs of `problem`'s robot, whether or not the file
+    /// turns self-collision on (`None`: its pair table is refused).
+    pub fn new(problem: &Problem) -> Option<LinkPairs> {
+        let table = problem.pair_table().ok()?;
+        Some(LinkPairs {
+            pairs: table
+                .pairs()
+                .filter(|&(_, _, status)| status == PairStatus::Checked)
+                .map(|(a, b, _)| (a, b))
+                .collect(),
+            radius: problem.links.radius.iter().map(|&r| r as f64).collect(),
+        })
+    }
+
+    /// The closest checked pair at `q` (`None`: no pair checked).
+    pub fn closest(&self, problem: &Problem, q: &[f64]) -> Option<LinkGap> {
+        self.closest_apart(problem, q, 0)
+    }
+
+    /// The closest checked pair at `q` of links at least `apart` apart on
+    /// the chain (`b - a >= apart`; `None`: no such pair checked).
+    pub fn closest_apart(&self, problem: &Problem, q: &[f64], apart: usize) -> Option<LinkGap> {
+        let (o, _) = forward(problem, q);
+        self.pairs
+            .iter()
+            .filter(|&&(a, b)| b - a >= apart)
+            .map(|&(a, b)| {
+                let radii = self.radius[a] + self.radius[b];
+                let gap = segment_distance(o[a], o[a + 1], o[b], o[b + 1]) - radii;
+                LinkGap {
+                    links: (a, b),
+                    gap,
+                    clearance: gap / radii,
+                }
+            })
+            .min_by(|x, y| x.clearance.total_cmp(&y.clearance))
+    }
+}
+
+/// The closest checked pair of links of a configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkGap {
+    /// The two links, 0-based (DH links `a + 1`, `b + 1`).
+    pub links: (usize, usize),
+    /// Distance between their capsules (the chords' distance less both radii), length units.
+    pub gap: f64,
+    /// `gap / (r_a + r_b)`: the planner's dimensionless clearance of a link pair.
+    pub clearance: f64,
 }
 
 impl Draft {
@@ -32,7 +103,39 @@ impl Draft {
             spec,
             problem,
             geometry,
+            links: None,
         })
+    }
+
+    /// From now on a configuration is clear only if every pair of links the
+    /// scenario checks keeps `gap / (r_a + r_b) >= margin` (see
+    /// [`Draft::link_gap`]). `None` when the scenario has no self-collision
+    /// checks or its pair table is refused.
+    pub fn keep_links_apart(&mut self, margin: f64) -> Option<()> {
+        if !self.problem.links.enabled {
+            return None;
+        }
+        self.links = Some((LinkPairs::new(&self.problem)?, margin));
+        Some(())
+    }
+
+    /// The closest checked pair of links at `q` at least `apart` links
+    /// apart on the chain (`None`: no such pair checked, or
+    /// [`Draft::keep_links_apart`] not asked).
+    pub fn link_gap(&self, q: &[f64], apart: usize) -> Option<LinkGap> {
+        self.links
+            .as_ref()?
+            .0
+            .closest_apart(&self.problem, q, apart)
+    }
+
+    /// Whether the links at `q` keep the margin of [`Draft::keep_links_apart`]
+    /// (always, when not asked).
+    pub fn links_apart(&self, q: &[f64]) -> bool {
+        match (&self.links, self.link_gap(q, 0)) {
+            (Some((_, margin)), Some(g)) => g.clearance >= *margin,
+            _ => true,
+        }
     }
 
     /// The loaded problem of the draft.
@@ -70,9 +173,13 @@ impl Draft {
         self.geometry = Geometry::new(&self.problem);
     }
 
-    /// Whether `q` is within limits and clear of every obstacle by [`CLEAR_MARGIN`].
+    /// Whether `q` is within limits and clear of every obstacle by
+    /// [`CLEAR_MARGIN`] (and its links apart, when the family asked:
+    /// [`Draft::keep_links_apart`]).
     pub fn clear(&self, q: &[f64]) -> bool {
-        within_limits(&self.problem, q) && self.geometry.is_clear(q, CLEAR_MARGIN)
+        within_limits(&self.problem, q)
+            && self.geometry.is_clear(q, CLEAR_MARGIN)
+            && self.links_apart(q)
     }
 
     /// Adds `o` if every configuration in `keep` stays clear; returns whether it did.
@@ -211,7 +318,11 @@ impl Draft {
         problem.validate().ok()?;
         let geometry = Geometry::new(&problem);
         let start_read: Vec<f64> = problem.start.iter().map(|&x| x as f64).collect();
-        let ok = |q: &[f64]| within_limits(&problem, q) && geometry.is_clear(q, CLEAR_MARGIN);
+        let ok = |q: &[f64]| {
+            within_limits(&problem, q)
+                && geometry.is_clear(q, CLEAR_MARGIN)
+                && self.links_apart(q)
+        };
         if start_read != start || !ok(start) || !ok(goal) {
             return None;
         }
@@ -294,4 +405,44 @@ pub fn end_path_points(problem: &Problem, a: &[f64], b: &[f64]) -> Vec<[f64; 3]>
 /// Euclidean distance.
 pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     libm::sqrt((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+}
+
+/// Distance between the segments `p1 q1` and `p2 q2` (Ericson, *Real-Time
+/// Collision Detection*, 5.1.9), `f64`.
+pub fn segment_distance(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (d1, d2, r) = (sub(q1, p1), sub(q2, p2), sub(p1, p2));
+    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
+    let tiny = 1e-18;
+    let (s, t) = if a <= tiny && e <= tiny {
+        (0.0, 0.0)
+    } else if a <= tiny {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = dot(d1, r);
+        if e <= tiny {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = dot(d1, d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > tiny * a * e {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    let c1 = [0, 1, 2].map(|k| p1[k] + s * d1[k]);
+    let c2 = [0, 1, 2].map(|k| p2[k] + t * d2[k]);
+    dist(c1, c2)
 }
