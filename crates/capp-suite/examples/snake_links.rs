@@ -76,7 +76,12 @@ fn main() {
             let r = closest(text, &c.name, &c.text);
             line += &format!(
                 " | {}: {:<8} {:>5} st {} ({}-{})",
-                names[i], r.outcome, r.steps, f(r.gap), r.links.0, r.links.1
+                names[i],
+                r.outcome,
+                r.steps,
+                f(r.gap),
+                r.links.0,
+                r.links.1
             );
             all[i].push(r);
         }
@@ -91,7 +96,9 @@ fn main() {
             steps.len(),
             runs.len(),
             steps.get(steps.len() / 2).copied().unwrap_or(0),
-            runs.iter().filter(|r| r.gap.is_some_and(|g| g < 0.0)).count()
+            runs.iter()
+                .filter(|r| r.gap.is_some_and(|g| g < 0.0))
+                .count()
         );
     }
 }

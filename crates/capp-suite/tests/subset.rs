@@ -171,6 +171,71 @@ fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
     }
 }
 
+/// `snake_folds`: starts and goals keep every checked pair of links apart,
+/// goals are folded (two links far apart on the chain within two radius
+/// sums), the file allows exactly the pairs of a link and the next but one,
+/// which never touch within the limits (sampled here), and the planner
+/// keeps the checked pairs apart on every row.
+#[test]
+fn snake_cases_fold_and_keep_their_links_apart() {
+    use capp_core::self_collision::pairs::PairStatus;
+    use capp_suite::families::scene::{random_config, segment_distance, LinkPairs};
+    use capp_suite::families::snake_folds::{FOLDED, FOLD_APART, JOINTS, LINK, LINK_MARGIN};
+    let f = family("snake_folds");
+    let cap = format!("max_steps = {CAP}");
+    for (i, c) in families::cases(&f, SEED, JOINTS.len())
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let problem = case::parse(&c.text, &c.name).unwrap();
+        let n = problem.joints.len();
+        assert_eq!(n, JOINTS[i], "{}", c.name);
+        assert!(problem.links.enabled, "{}", c.name);
+        let table = problem.pair_table().unwrap();
+        for (a, b, status) in table.pairs() {
+            let want = match b - a {
+                1 => PairStatus::Adjacent,
+                2 => PairStatus::Allowed,
+                _ => PairStatus::Checked,
+            };
+            assert_eq!(status, want, "{}: links {} and {}", c.name, a + 1, b + 1);
+        }
+        let pairs = LinkPairs::new(&problem).unwrap();
+        for (what, q) in [("start", &c.start), ("goal", &c.goal)] {
+            let g = pairs.closest(&problem, q).unwrap();
+            assert!(g.clearance >= LINK_MARGIN, "{} {what}: {g:?}", c.name);
+        }
+        let fold = pairs.closest_apart(&problem, &c.goal, FOLD_APART).unwrap();
+        assert!(fold.clearance <= FOLDED, "{}: {fold:?}", c.name);
+
+        // The allowed pairs never touch: every chord at least LINK from the
+        // next but one, anywhere within the limits.
+        let limits: Vec<(f64, f64)> = problem
+            .joints
+            .iter()
+            .map(|j| (j.min as f64, j.max as f64))
+            .collect();
+        let mut rng = Rng::new(7);
+        for _ in 0..200 {
+            let q = random_config(&mut rng, &limits, 1.0);
+            let (o, _) = capp_sim::geometry::forward(&problem, &q);
+            for k in 0..n - 2 {
+                let d = segment_distance(o[k], o[k + 1], o[k + 2], o[k + 3]);
+                assert!(d >= LINK * (1.0 - 1e-5), "{}: links {k} +2: {d}", c.name);
+            }
+        }
+
+        let text = with_settings(&c.text, &cap);
+        let (problem, result) = runner::plan_text(&text, &c.name).unwrap();
+        for r in &result.rows {
+            let q: Vec<f64> = r.q.iter().map(|&x| x as f64).collect();
+            let g = pairs.closest(&problem, &q).unwrap();
+            assert!(g.gap > 0.0, "{} step {}: {g:?}", c.name, r.step);
+        }
+    }
+}
+
 /// An independent re-check of a path, finer than the oracle's own (the
 /// link capsules sampled as the obstacles are, not by the motion bound).
 fn path_is_free(problem: &capp_sim::Problem, path: &[Vec<f64>]) -> bool {

@@ -29,9 +29,9 @@
 
 use std::fmt::Write as _;
 
+use capp_core::math::Vec3;
 use capp_core::self_collision::pairs::PairStatus;
 use capp_core::self_collision::segment::closest_points;
-use capp_core::math::Vec3;
 
 use super::canvas::escape;
 use super::chart::nice_step;
@@ -129,7 +129,10 @@ fn hex(c: [u8; 3]) -> String {
 /// Per frame (origins `frames`), the closest pair of links the scenario
 /// checks: `[a, b, gap]`, DH link numbers (1-based) and the capsules'
 /// distance; `None` for every frame when no pair is checked.
-pub fn closest_links(problem: &Problem, frames: &[&[[f64; 3]]]) -> Vec<Option<(usize, usize, f64)>> {
+pub fn closest_links(
+    problem: &Problem,
+    frames: &[&[[f64; 3]]],
+) -> Vec<Option<(usize, usize, f64)>> {
     let checked: Vec<(usize, usize)> = if problem.links.enabled {
         problem.pair_table().map_or(Vec::new(), |t| {
             t.pairs()
@@ -285,7 +288,9 @@ pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
     let pairs: Vec<String> = closest_links(problem, &shown)
         .into_iter()
         .map(|p| match p {
-            Some((a, b, gap)) => format!("[{a},{b},{}]", list([Some(gap)]).trim_matches(['[', ']'])),
+            Some((a, b, gap)) => {
+                format!("[{a},{b},{}]", list([Some(gap)]).trim_matches(['[', ']']))
+            }
             None => "null".into(),
         })
         .collect();

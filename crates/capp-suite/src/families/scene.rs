@@ -319,9 +319,7 @@ impl Draft {
         let geometry = Geometry::new(&problem);
         let start_read: Vec<f64> = problem.start.iter().map(|&x| x as f64).collect();
         let ok = |q: &[f64]| {
-            within_limits(&problem, q)
-                && geometry.is_clear(q, CLEAR_MARGIN)
-                && self.links_apart(q)
+            within_limits(&problem, q) && geometry.is_clear(q, CLEAR_MARGIN) && self.links_apart(q)
         };
         if start_read != start || !ok(start) || !ok(goal) {
             return None;
@@ -445,4 +443,43 @@ pub fn segment_distance(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3]) 
     let c1 = [0, 1, 2].map(|k| p1[k] + s * d1[k]);
     let c2 = [0, 1, 2].map(|k| p2[k] + t * d2[k]);
     dist(c1, c2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closest points against a dense grid of both segments.
+    #[test]
+    fn segment_distance_is_the_least_distance() {
+        let mut rng = Rng::new(11);
+        let point = |rng: &mut Rng| [0, 1, 2].map(|_| rng.range(-1.0, 1.0));
+        for case in 0..200 {
+            let (p1, mut q1, p2, mut q2) = (
+                point(&mut rng),
+                point(&mut rng),
+                point(&mut rng),
+                point(&mut rng),
+            );
+            // Also parallel and degenerate segments.
+            match case % 4 {
+                1 => q2 = [0, 1, 2].map(|k| p2[k] + 0.7 * (q1[k] - p1[k])),
+                2 => q1 = p1,
+                3 => (q1, q2) = (p1, p2),
+                _ => {}
+            }
+            let d = segment_distance(p1, q1, p2, q2);
+            let at = |p: [f64; 3], q: [f64; 3], s: f64| [0, 1, 2].map(|k| p[k] + s * (q[k] - p[k]));
+            let m = 200;
+            let mut brute = f64::INFINITY;
+            for i in 0..=m {
+                for j in 0..=m {
+                    let (s, t) = (i as f64 / m as f64, j as f64 / m as f64);
+                    brute = brute.min(dist(at(p1, q1, s), at(p2, q2, t)));
+                }
+            }
+            assert!(d <= brute + 1e-12, "case {case}: {d} > {brute}");
+            assert!(d >= brute - 0.02, "case {case}: {d} << {brute}");
+        }
+    }
 }
