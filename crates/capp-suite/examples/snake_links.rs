@@ -3,12 +3,12 @@
 //! touch, which they never can), with every pair checked (no `allow`), and
 //! with self-collision off (`[robot] self_collision = false`): the closest
 //! pair the generated file checks over every row, by the suite's own `f64`
-//! capsules (`scene::LinkPairs`). A negative gap is a self-collision.
+//! capsules (`capp_sim::geometry::Geometry`). A negative gap is a self-collision.
 //!
 //!     cargo run --release -p capp-suite --example snake_links -- [SEED] [CASES]
 
 use capp_core::Outcome;
-use capp_suite::families::scene::LinkPairs;
+use capp_sim::geometry::Geometry;
 use capp_suite::families::{self, snake_folds};
 use capp_suite::runner::plan_text;
 
@@ -29,16 +29,16 @@ fn closest(text: &str, name: &str, pairs_of: &str) -> Run {
             gap: None,
             links: (0, 0),
         },
-        Ok((problem, result)) => {
+        Ok((_, result)) => {
             // Always measured over the pairs the default file checks.
             let reference = capp_suite::case::parse(pairs_of, name).unwrap();
-            let pairs = LinkPairs::new(&reference).unwrap();
+            let geometry = Geometry::new(&reference);
             let worst = result
                 .rows
                 .iter()
                 .filter_map(|r| {
                     let q: Vec<f64> = r.q.iter().map(|&x| x as f64).collect();
-                    pairs.closest(&problem, &q)
+                    geometry.closest_link_pair(&q)
                 })
                 .min_by(|a, b| a.gap.total_cmp(&b.gap));
             Run {

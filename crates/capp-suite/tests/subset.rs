@@ -171,18 +171,19 @@ fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
     }
 }
 
-/// `snake_folds`: starts and goals keep every checked pair of links apart,
-/// goals are folded (two links far apart on the chain within two radius
-/// sums), the file allows exactly the pairs of a link and the next but one,
-/// which never touch within the limits (sampled here), and the planner
-/// keeps the checked pairs apart on every row.
+/// `snake_folds`: the file allows exactly the pairs of a link and the next
+/// but one, which never touch within the limits (sampled here: every chord
+/// at least a link length from the next but one); starts and goals keep
+/// every checked pair apart, and goals are folded (two links far apart on
+/// the chain within two radius sums). The planner's runs are checked for
+/// self-collision with every family's above.
 #[test]
 fn snake_cases_fold_and_keep_their_links_apart() {
     use capp_core::self_collision::pairs::PairStatus;
-    use capp_suite::families::scene::{random_config, segment_distance, LinkPairs};
+    use capp_sim::geometry::{forward, segment_distance};
+    use capp_suite::families::scene::{closest_links, random_config};
     use capp_suite::families::snake_folds::{FOLDED, FOLD_APART, JOINTS, LINK, LINK_MARGIN};
     let f = family("snake_folds");
-    let cap = format!("max_steps = {CAP}");
     for (i, c) in families::cases(&f, SEED, JOINTS.len())
         .unwrap()
         .iter()
@@ -201,16 +202,6 @@ fn snake_cases_fold_and_keep_their_links_apart() {
             };
             assert_eq!(status, want, "{}: links {} and {}", c.name, a + 1, b + 1);
         }
-        let pairs = LinkPairs::new(&problem).unwrap();
-        for (what, q) in [("start", &c.start), ("goal", &c.goal)] {
-            let g = pairs.closest(&problem, q).unwrap();
-            assert!(g.clearance >= LINK_MARGIN, "{} {what}: {g:?}", c.name);
-        }
-        let fold = pairs.closest_apart(&problem, &c.goal, FOLD_APART).unwrap();
-        assert!(fold.clearance <= FOLDED, "{}: {fold:?}", c.name);
-
-        // The allowed pairs never touch: every chord at least LINK from the
-        // next but one, anywhere within the limits.
         let limits: Vec<(f64, f64)> = problem
             .joints
             .iter()
@@ -219,20 +210,20 @@ fn snake_cases_fold_and_keep_their_links_apart() {
         let mut rng = Rng::new(7);
         for _ in 0..200 {
             let q = random_config(&mut rng, &limits, 1.0);
-            let (o, _) = capp_sim::geometry::forward(&problem, &q);
+            let (o, _) = forward(&problem, &q);
             for k in 0..n - 2 {
-                let d = segment_distance(o[k], o[k + 1], o[k + 2], o[k + 3]);
+                let d = segment_distance(o[k], o[k + 1], o[k + 2], o[k + 3]).distance;
                 assert!(d >= LINK * (1.0 - 1e-5), "{}: links {k} +2: {d}", c.name);
             }
         }
 
-        let text = with_settings(&c.text, &cap);
-        let (problem, result) = runner::plan_text(&text, &c.name).unwrap();
-        for r in &result.rows {
-            let q: Vec<f64> = r.q.iter().map(|&x| x as f64).collect();
-            let g = pairs.closest(&problem, &q).unwrap();
-            assert!(g.gap > 0.0, "{} step {}: {g:?}", c.name, r.step);
+        let geometry = Geometry::new(&problem);
+        for (what, q) in [("start", &c.start), ("goal", &c.goal)] {
+            let g = closest_links(&problem, &geometry, q, 0).unwrap();
+            assert!(g.clearance >= LINK_MARGIN, "{} {what}: {g:?}", c.name);
         }
+        let fold = closest_links(&problem, &geometry, &c.goal, FOLD_APART).unwrap();
+        assert!(fold.clearance <= FOLDED, "{}: {fold:?}", c.name);
     }
 }
 

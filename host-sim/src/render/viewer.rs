@@ -29,15 +29,11 @@
 
 use std::fmt::Write as _;
 
-use capp_core::math::Vec3;
-use capp_core::self_collision::pairs::PairStatus;
-use capp_core::self_collision::segment::closest_points;
-
 use super::canvas::escape;
 use super::chart::nice_step;
 use super::views::{bounds, escape_color, frames, origins, surface};
 use crate::escapes::{classify, side_name, Kind};
-use crate::geometry::forward;
+use crate::geometry::{forward, Geometry};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -127,41 +123,20 @@ fn hex(c: [u8; 3]) -> String {
 }
 
 /// Per frame (origins `frames`), the closest pair of links the scenario
-/// checks: `[a, b, gap]`, DH link numbers (1-based) and the capsules'
-/// distance; `None` for every frame when no pair is checked.
+/// checks, by the independent model ([`Geometry::link_gaps`], as the
+/// summary names it): DH link numbers (1-based) and the capsules' distance;
+/// `None` for every frame when no pair is checked.
 pub fn closest_links(
     problem: &Problem,
     frames: &[&[[f64; 3]]],
 ) -> Vec<Option<(usize, usize, f64)>> {
-    let checked: Vec<(usize, usize)> = if problem.links.enabled {
-        problem.pair_table().map_or(Vec::new(), |t| {
-            t.pairs()
-                .filter(|&(_, _, s)| s == PairStatus::Checked)
-                .map(|(a, b, _)| (a, b))
-                .collect()
-        })
-    } else {
-        Vec::new()
-    };
-    let radius = |k: usize| problem.links.radius.get(k).copied().unwrap_or(0.0);
-    let point = |p: [f64; 3]| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
+    let geometry = Geometry::new(problem);
     frames
         .iter()
         .map(|o| {
-            checked
-                .iter()
-                .filter(|&&(_, b)| b + 1 < o.len())
-                .map(|&(a, b)| {
-                    let c = closest_points(
-                        &point(o[a]),
-                        &point(o[a + 1]),
-                        &point(o[b]),
-                        &point(o[b + 1]),
-                    );
-                    let gap = libm::sqrtf(c.distance_sq) - radius(a) - radius(b);
-                    (a + 1, b + 1, gap as f64)
-                })
-                .min_by(|x, y| x.2.total_cmp(&y.2))
+            geometry
+                .worst_gap(&geometry.link_gaps(o))
+                .map(|g| (g.links.0 + 1, g.links.1 + 1, g.gap))
         })
         .collect()
 }

@@ -5,10 +5,9 @@
 //! A family may also ask that its configurations keep the links apart
 //! ([`Draft::keep_links_apart`]): then "clear" also means that every pair of
 //! links the scenario checks (its allowed-collision matrix, as `capp acm`
-//! prints it) keeps its capsules `gap >= margin (r_a + r_b)` apart, by an
-//! `f64` segment-to-segment distance of its own ([`segment_distance`]).
+//! prints it) keeps its capsules `gap >= margin (r_a + r_b)` apart, by the
+//! independent `f64` model's capsules ([`Geometry::link_gaps`]).
 
-use capp_core::self_collision::pairs::PairStatus;
 use capp_core::SuperEllipsoid;
 use capp_sim::geometry::{forward, Geometry};
 use capp_sim::Problem;
@@ -28,70 +27,46 @@ pub struct Draft {
     pub spec: Spec,
     problem: Problem,
     geometry: Geometry,
-    /// Self-collision of starts and goals, when the family asks for it.
-    links: Option<(LinkPairs, f64)>,
+    /// The smallest link clearance starts and goals keep, when the family
+    /// asks for it ([`Draft::keep_links_apart`]).
+    link_margin: Option<f64>,
 }
 
-/// The pairs of links a scenario checks (its allowed-collision matrix, as
-/// `capp acm` prints it) and their capsules, read independently of the
-/// planner: `f64` chords from the checker's kinematics.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LinkPairs {
-    /// Checked pairs `(a, b)`, 0-based links, `a < b`.
-    pub pairs: Vec<(usize, usize)>,
-    /// Capsule radius per link.
-    pub radius: Vec<f64>,
-}
-
-impl LinkPairs {
-    /// The checked pairs of `problem`'s robot, whether or not the file
-    /// turns self-collision on (`None`: its pair table is refused).
-    pub fn new(problem: &Problem) -> Option<LinkPairs> {
-        let table = problem.pair_table().ok()?;
-        Some(LinkPairs {
-            pairs: table
-                .pairs()
-                .filter(|&(_, _, status)| status == PairStatus::Checked)
-                .map(|(a, b, _)| (a, b))
-                .collect(),
-            radius: problem.links.radius.iter().map(|&r| r as f64).collect(),
-        })
-    }
-
-    /// The closest checked pair at `q` (`None`: no pair checked).
-    pub fn closest(&self, problem: &Problem, q: &[f64]) -> Option<LinkGap> {
-        self.closest_apart(problem, q, 0)
-    }
-
-    /// The closest checked pair at `q` of links at least `apart` apart on
-    /// the chain (`b - a >= apart`; `None`: no such pair checked).
-    pub fn closest_apart(&self, problem: &Problem, q: &[f64], apart: usize) -> Option<LinkGap> {
-        let (o, _) = forward(problem, q);
-        self.pairs
-            .iter()
-            .filter(|&&(a, b)| b - a >= apart)
-            .map(|&(a, b)| {
-                let radii = self.radius[a] + self.radius[b];
-                let gap = segment_distance(o[a], o[a + 1], o[b], o[b + 1]) - radii;
-                LinkGap {
-                    links: (a, b),
-                    gap,
-                    clearance: gap / radii,
-                }
-            })
-            .min_by(|x, y| x.clearance.total_cmp(&y.clearance))
-    }
-}
-
-/// The closest checked pair of links of a configuration.
+/// The closest checked pair of links of a configuration, with the
+/// planner's dimensionless clearance.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LinkGap {
+pub struct LinkClearance {
     /// The two links, 0-based (DH links `a + 1`, `b + 1`).
     pub links: (usize, usize),
     /// Distance between their capsules (the chords' distance less both radii), length units.
     pub gap: f64,
-    /// `gap / (r_a + r_b)`: the planner's dimensionless clearance of a link pair.
+    /// `gap / (r_a + r_b)`, as the planner measures a link pair.
     pub clearance: f64,
+}
+
+/// The closest pair of links at `q` among those `geometry` checks (the
+/// scenario's allowed-collision matrix) at least `apart` links apart on the
+/// chain (`b - a >= apart`); `None` when there is none. `problem` gives the
+/// radii.
+pub fn closest_links(
+    problem: &Problem,
+    geometry: &Geometry,
+    q: &[f64],
+    apart: usize,
+) -> Option<LinkClearance> {
+    let (origins, _) = geometry.forward(q);
+    let radius = |k: usize| problem.links.radius.get(k).map_or(0.0, |&r| r as f64);
+    geometry
+        .checked_pairs()
+        .iter()
+        .zip(geometry.link_gaps(&origins))
+        .filter(|(&(a, b), _)| b - a >= apart)
+        .map(|(&(a, b), gap)| LinkClearance {
+            links: (a, b),
+            gap,
+            clearance: gap / (radius(a) + radius(b)),
+        })
+        .min_by(|x, y| x.clearance.total_cmp(&y.clearance))
 }
 
 impl Draft {
@@ -103,38 +78,32 @@ impl Draft {
             spec,
             problem,
             geometry,
-            links: None,
+            link_margin: None,
         })
     }
 
     /// From now on a configuration is clear only if every pair of links the
     /// scenario checks keeps `gap / (r_a + r_b) >= margin` (see
     /// [`Draft::link_gap`]). `None` when the scenario has no self-collision
-    /// checks or its pair table is refused.
+    /// checks.
     pub fn keep_links_apart(&mut self, margin: f64) -> Option<()> {
-        if !self.problem.links.enabled {
-            return None;
-        }
-        self.links = Some((LinkPairs::new(&self.problem)?, margin));
-        Some(())
+        self.geometry.self_collision().then(|| {
+            self.link_margin = Some(margin);
+        })
     }
 
     /// The closest checked pair of links at `q` at least `apart` links
-    /// apart on the chain (`None`: no such pair checked, or
-    /// [`Draft::keep_links_apart`] not asked).
-    pub fn link_gap(&self, q: &[f64], apart: usize) -> Option<LinkGap> {
-        self.links
-            .as_ref()?
-            .0
-            .closest_apart(&self.problem, q, apart)
+    /// apart on the chain ([`closest_links`]).
+    pub fn link_gap(&self, q: &[f64], apart: usize) -> Option<LinkClearance> {
+        closest_links(&self.problem, &self.geometry, q, apart)
     }
 
     /// Whether the links at `q` keep the margin of [`Draft::keep_links_apart`]
     /// (always, when not asked).
     pub fn links_apart(&self, q: &[f64]) -> bool {
-        match (&self.links, self.link_gap(q, 0)) {
-            (Some((_, margin)), Some(g)) => g.clearance >= *margin,
-            _ => true,
+        match self.link_margin {
+            Some(margin) => self.link_gap(q, 0).is_none_or(|g| g.clearance >= margin),
+            None => true,
         }
     }
 
@@ -403,83 +372,4 @@ pub fn end_path_points(problem: &Problem, a: &[f64], b: &[f64]) -> Vec<[f64; 3]>
 /// Euclidean distance.
 pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     libm::sqrt((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
-}
-
-/// Distance between the segments `p1 q1` and `p2 q2` (Ericson, *Real-Time
-/// Collision Detection*, 5.1.9), `f64`.
-pub fn segment_distance(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3]) -> f64 {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (d1, d2, r) = (sub(q1, p1), sub(q2, p2), sub(p1, p2));
-    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
-    let tiny = 1e-18;
-    let (s, t) = if a <= tiny && e <= tiny {
-        (0.0, 0.0)
-    } else if a <= tiny {
-        (0.0, (f / e).clamp(0.0, 1.0))
-    } else {
-        let c = dot(d1, r);
-        if e <= tiny {
-            ((-c / a).clamp(0.0, 1.0), 0.0)
-        } else {
-            let b = dot(d1, d2);
-            let denom = a * e - b * b;
-            let mut s = if denom > tiny * a * e {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t = (b * s + f) / e;
-            if t < 0.0 {
-                t = 0.0;
-                s = (-c / a).clamp(0.0, 1.0);
-            } else if t > 1.0 {
-                t = 1.0;
-                s = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            (s, t)
-        }
-    };
-    let c1 = [0, 1, 2].map(|k| p1[k] + s * d1[k]);
-    let c2 = [0, 1, 2].map(|k| p2[k] + t * d2[k]);
-    dist(c1, c2)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The closest points against a dense grid of both segments.
-    #[test]
-    fn segment_distance_is_the_least_distance() {
-        let mut rng = Rng::new(11);
-        let point = |rng: &mut Rng| [0, 1, 2].map(|_| rng.range(-1.0, 1.0));
-        for case in 0..200 {
-            let (p1, mut q1, p2, mut q2) = (
-                point(&mut rng),
-                point(&mut rng),
-                point(&mut rng),
-                point(&mut rng),
-            );
-            // Also parallel and degenerate segments.
-            match case % 4 {
-                1 => q2 = [0, 1, 2].map(|k| p2[k] + 0.7 * (q1[k] - p1[k])),
-                2 => q1 = p1,
-                3 => (q1, q2) = (p1, p2),
-                _ => {}
-            }
-            let d = segment_distance(p1, q1, p2, q2);
-            let at = |p: [f64; 3], q: [f64; 3], s: f64| [0, 1, 2].map(|k| p[k] + s * (q[k] - p[k]));
-            let m = 200;
-            let mut brute = f64::INFINITY;
-            for i in 0..=m {
-                for j in 0..=m {
-                    let (s, t) = (i as f64 / m as f64, j as f64 / m as f64);
-                    brute = brute.min(dist(at(p1, q1, s), at(p2, q2, t)));
-                }
-            }
-            assert!(d <= brute + 1e-12, "case {case}: {d} > {brute}");
-            assert!(d >= brute - 0.02, "case {case}: {d} << {brute}");
-        }
-    }
 }

@@ -21,9 +21,10 @@
 //! (`capp acm`). Checked, those pairs sit at a constant clearance `(LINK -
 //! 2 RADIUS) / 2 RADIUS = 0.43`, inside the planner's influence, and their
 //! room (half their gap against each link's whole travel) throttles every
-//! step: on seed 1 the planner then reached 30 of 60 cases instead of 60
-//! (`examples/snake_links.rs` plans both, and with self-collision off, where
-//! 9 of the 60 runs put two links into each other).
+//! step: the planner then reached 29 of seed 1's 60 cases instead of 59,
+//! 22 of seed 2's instead of 60 (`examples/snake_links.rs` plans both, and
+//! with self-collision off, where 9 and 10 of the 60 runs put two links into
+//! each other).
 //!
 //! Scene: a floor 0.45 to 0.7 m below the base, a slim pedestal under it;
 //! then a folded goal configuration (random within 80 % of each range,
