@@ -146,6 +146,8 @@
   const escapeColours = {};
   RUN.escapes.forEach((e) => { escapeColours[e.kind] = e.colour; });
   legendRow('#d05a28', 'links; their end-effector frame');
+  legendRow('#4f86d6', 'link capsules (checkbox above): ' + (RUN.self_collision
+    ? 'the closest checked pair red' : 'self-collision is off in this scenario'));
   legendRow('#8a929e', 'grid: ' + RUN.grid + ' ' + RUN.unit + ' squares; world frame at the origin');
 
   // The arm: links as cylinders between frame origins, joints as spheres.
@@ -165,6 +167,38 @@
       links.push(link);
     }
   }
+  // The link capsules: link i is the chord from origin i to origin i + 1,
+  // a see-through tube of radius RUN.capsules[i] with a ball at each end.
+  // Hidden until the checkbox (or `c`, or #capsules in the URL) shows them.
+  const capsules = new THREE.Group();
+  const capsuleMaterial = new THREE.MeshLambertMaterial({
+    color: 0x4f86d6, transparent: true, opacity: 0.3, depthWrite: false,
+  });
+  const closeMaterial = new THREE.MeshLambertMaterial({
+    color: 0xd02020, transparent: true, opacity: 0.45, depthWrite: false,
+  });
+  const tubeGeometry = new THREE.CylinderGeometry(1, 1, 1, 20, 1, true);
+  const capGeometry = new THREE.SphereGeometry(1, 20, 12);
+  const tubes = [];
+  for (let i = 0; i + 1 < J && i < RUN.capsules.length; i++) {
+    const radius = RUN.capsules[i];
+    const parts = [new THREE.Mesh(tubeGeometry, capsuleMaterial),
+      new THREE.Mesh(capGeometry, capsuleMaterial), new THREE.Mesh(capGeometry, capsuleMaterial)];
+    parts[1].scale.setScalar(radius);
+    parts[2].scale.setScalar(radius);
+    parts.forEach((m) => capsules.add(m));
+    tubes.push({ radius, parts });
+  }
+  capsules.visible = false;
+  scene.add(capsules);
+  const capsuleBox = $('capsules');
+  function showCapsules(on) {
+    capsules.visible = on;
+    document.body.dataset.capsules = on ? 'shown' : 'hidden';
+  }
+  capsuleBox.checked = false;
+  capsuleBox.onchange = () => showCapsules(capsuleBox.checked);
+  showCapsules(false);
   const tool = arrows(0.07 * side, 0.03 * side);
   scene.add(tool.group);
   const up = new THREE.Vector3(0, 1, 0), a = new THREE.Vector3(), b = new THREE.Vector3(), d = new THREE.Vector3();
@@ -182,6 +216,24 @@
       link.quaternion.setFromUnitVectors(up, d.divideScalar(length));
       link.scale.set(1, length, 1);
     }
+    const close = RUN.closest_links[f];
+    tubes.forEach((t, i) => {
+      const [tube, capA, capB] = t.parts;
+      a.copy(joints[i].position);
+      b.copy(joints[i + 1].position);
+      d.subVectors(b, a);
+      const length = d.length();
+      tube.visible = length > 1e-6 * side;
+      if (tube.visible) {
+        tube.position.addVectors(a, b).multiplyScalar(0.5);
+        tube.quaternion.setFromUnitVectors(up, d.divideScalar(length));
+        tube.scale.set(t.radius, length, t.radius);
+      }
+      capA.position.copy(a);
+      capB.position.copy(b);
+      const red = close !== null && (close[0] === i + 1 || close[1] === i + 1);
+      t.parts.forEach((m) => { m.material = red ? closeMaterial : capsuleMaterial; });
+    });
     orient(tool, joints[J - 1].position, RUN.end_axes, 9 * f);
   }
 
@@ -194,6 +246,12 @@
     ['orientation error', (f) => fmt(RUN.orientation_error[f], 4)],
     ['clearance C − 1', (f) => fmt(RUN.clearance[f], 4)],
   ];
+  if (RUN.closest_links.some((p) => p !== null)) {
+    fields.push(['closest links [' + RUN.unit + ']', (f) => {
+      const p = RUN.closest_links[f];
+      return p === null ? '—' : p[0] + ' – ' + p[1] + ': ' + fmt(p[2], 4);
+    }]);
+  }
   function fmt(x, digits) {
     if (x === null || x === undefined) return '—';
     const m = Math.abs(x);
@@ -230,6 +288,7 @@
     if (e.key === 'ArrowRight') { setPlaying(false); show(Math.min(frame + 1, RUN.frames - 1)); }
     if (e.key === 'ArrowLeft') { setPlaying(false); show(Math.max(frame - 1, 0)); }
     if (e.key === 'h') home();
+    if (e.key === 'c') capsuleBox.click();
   });
   // Centre the scene in the space right of the panel on wide windows.
   function fit() {
@@ -252,6 +311,9 @@
     controls.update();
     renderer.render(scene, camera);
   }
+  // viewer.html#capsules opens with the capsules shown, through the
+  // checkbox as a click would.
+  if (/capsules/.test(window.location.hash)) capsuleBox.click();
   // viewer.html#frame=N opens paused at frame N.
   const asked = /frame=(\d+)/.exec(window.location.hash);
   if (asked) setPlaying(false);

@@ -160,6 +160,66 @@ fn rendered_files_are_valid_and_not_blank() {
     );
 }
 
+/// `viewer.html` carries every link's capsule (its radius; the chord is the
+/// link the page already draws between frame origins), whether the scenario
+/// keeps them apart, the closest checked pair of every frame, and the
+/// checkbox that shows them.
+#[test]
+fn viewer_has_every_links_capsule_and_the_toggle() {
+    let (problem, t) = payload_bay();
+    let html = render::viewer::viewer(&problem, &t);
+    let run = html.split("const RUN = ").nth(1).unwrap();
+    let run = run.split("</script>").next().unwrap();
+    let field = |name: &str| {
+        run.split(&format!("\n\"{name}\": "))
+            .nth(1)
+            .unwrap_or_else(|| panic!("no {name}"))
+            .split(",\n")
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    let frames: usize = field("frames").parse().unwrap();
+    let radii: Vec<f64> = field("capsules")
+        .trim_matches(['[', ']'])
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(radii.len(), problem.joints.len(), "one capsule per link");
+    for (r, &want) in radii.iter().zip(&problem.links.radius) {
+        assert!((r - want as f64).abs() <= 1e-4 * want as f64, "{r} {want}");
+    }
+    assert_eq!(field("self_collision"), "true");
+    // Per frame, [a, b, gap] of the closest checked pair: PIPS's nearest
+    // pairs are never adjacent (the acm skips those) and never overlap.
+    let closest = field("closest_links");
+    let pairs: Vec<&str> = closest
+        .trim_start_matches("[[")
+        .trim_end_matches("]]")
+        .split("],[")
+        .collect();
+    assert_eq!(pairs.len(), frames, "{closest}");
+    for p in pairs {
+        let v: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect();
+        let (a, b, gap) = (v[0] as usize, v[1] as usize, v[2]);
+        assert!(1 <= a && a + 1 < b && b <= problem.joints.len(), "{p}");
+        assert!(gap > 0.0, "{p}");
+    }
+    // The toggle: a checkbox, its handler, the key and the URL option.
+    assert!(html.contains("<input type=\"checkbox\" id=\"capsules\">"));
+    assert!(html.contains("capsuleBox.onchange"));
+    assert!(html.contains("e.key === 'c'"));
+    assert!(html.contains("#capsules with the capsules shown"));
+
+    // Self-collision off: the capsules are still drawn, no pair is named.
+    let mut off = problem.clone();
+    off.links.enabled = false;
+    let html = render::viewer::viewer(&off, &t);
+    assert!(html.contains("\n\"self_collision\": false,\n"));
+    let nulls = vec!["null"; frames].join(",");
+    assert!(html.contains(&format!("\n\"closest_links\": [{nulls}],\n")));
+}
+
 /// The text is painted: removing it changes the title band, which is
 /// otherwise empty.
 #[test]

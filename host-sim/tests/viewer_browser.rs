@@ -242,3 +242,91 @@ fn viewer_shows_the_escape_under_way() {
     let before = dom(0);
     assert!(before.contains("escape: none (the law drives)"), "{before}");
 }
+
+/// The link capsules' checkbox works in a real browser: the page opens with
+/// them hidden; `#capsules` shows them through the checkbox (as a click
+/// would), the page says so (`data-capsules` on its body), and the
+/// screenshot gains their see-through blue.
+#[test]
+fn viewer_shows_and_hides_the_link_capsules() {
+    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
+    let Some(exe) = chromium() else {
+        assert!(
+            !required,
+            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
+        );
+        eprintln!("SKIPPED viewer_shows_and_hides_the_link_capsules: no Chromium found");
+        return;
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml");
+    let problem = Problem::load(&path).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&text, Path::new("trajectory.csv")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("viewer.html");
+    std::fs::write(&page, viewer(&problem, &t)).unwrap();
+    let url = |hash: &str| format!("file://{}{hash}", page.display());
+
+    let state = |hash: &str| {
+        let dom = browse_url(&exe, &url(hash), &["--dump-dom".to_string()]).stdout;
+        assert!(dom.contains("<title>ok "), "{dom}");
+        let body = dom.split("<body").nth(1).unwrap_or("");
+        let body = body.split('>').next().unwrap_or("").to_string();
+        (body, dom)
+    };
+    let (hidden, _) = state("#frame=0");
+    assert!(hidden.contains("data-capsules=\"hidden\""), "{hidden}");
+    let (shown, dom) = state("#frame=0&capsules");
+    assert!(shown.contains("data-capsules=\"shown\""), "{shown}");
+    // The planar arm's one checked pair, links 1 and 3, is named in the panel.
+    assert!(dom.contains("1 – 3: "), "{dom}");
+
+    // The same frame with the capsules hidden and shown: the see-through
+    // tubes (blue, the checked pair red) change the scene right of the panel.
+    let shot = |hash: &str, name: &str| {
+        let shot = dir.path().join(name);
+        let out = browse_url(
+            &exe,
+            &url(hash),
+            &[
+                "--window-size=1000,700".to_string(),
+                format!("--screenshot={}", shot.display()),
+            ],
+        );
+        assert!(
+            shot.is_file(),
+            "no screenshot; browser stderr:\n{}",
+            out.stderr
+        );
+        let file = std::fs::File::open(&shot).unwrap();
+        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .unwrap();
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        let channels = info.color_type.samples();
+        let (w, h) = (info.width as usize, info.height as usize);
+        let mut px = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 360..w {
+                let i = (y * w + x) * channels;
+                px.push([buf[i], buf[i + 1], buf[i + 2]]);
+            }
+        }
+        px
+    };
+    let (off, on) = (
+        shot("#frame=0", "hidden.png"),
+        shot("#frame=0&capsules", "shown.png"),
+    );
+    assert_eq!(off.len(), on.len());
+    let changed = off
+        .iter()
+        .zip(&on)
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 12))
+        .count();
+    eprintln!("{changed} pixels change when the capsules are shown");
+    assert!(changed > 2000, "{changed} pixels changed");
+}

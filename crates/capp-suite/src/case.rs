@@ -141,6 +141,9 @@ pub struct Spec {
     pub unit: Unit,
     /// Robot.
     pub robot: RobotSpec,
+    /// More `[robot]` lines (`key = value`, TOML, in the file's units):
+    /// `link_radius`, `self_collision`. Empty: the loader's defaults.
+    pub robot_settings: Vec<(String, String)>,
     /// Start configuration (radians / length units).
     pub start: Vec<f64>,
     /// Target position.
@@ -187,8 +190,17 @@ impl Spec {
             "\n[units]\nangle = \"radians\"\nlength = \"{}\"",
             self.unit.toml()
         );
+        if self.robot == RobotSpec::Pips || !self.robot_settings.is_empty() {
+            s.push_str("\n[robot]\n");
+        }
+        if self.robot == RobotSpec::Pips {
+            s.push_str("preset = \"pips\"\n");
+        }
+        for (k, v) in &self.robot_settings {
+            let _ = writeln!(s, "{k} = {v}");
+        }
         match &self.robot {
-            RobotSpec::Pips => s.push_str("\n[robot]\npreset = \"pips\"\n"),
+            RobotSpec::Pips => {}
             RobotSpec::Table(joints) => {
                 for j in joints {
                     let _ = writeln!(

@@ -17,7 +17,7 @@ use capp_suite::runner;
 use capp_suite::variants::{variants, with_settings};
 
 const SEED: u64 = 20_240_611;
-/// Cases per family in the subset (20 in all).
+/// Cases per family in the subset (25 in all).
 const PER_FAMILY: usize = 5;
 /// Step cap of the subset's runs.
 const CAP: u32 = 2500;
@@ -39,7 +39,7 @@ fn family(name: &str) -> Family {
 #[test]
 fn starts_and_goals_are_clear_within_limits_and_the_target_is_the_goal_pose() {
     let cases = subset();
-    assert_eq!(cases.len(), 4 * PER_FAMILY);
+    assert_eq!(cases.len(), families::families().len() * PER_FAMILY);
     for c in &cases {
         let problem = case::parse(&c.text, &c.name).unwrap();
         problem
@@ -168,6 +168,62 @@ fn planner_runs_never_collide_break_a_limit_or_run_past_the_cap() {
             m.straight_time <= m.same_path_time * (1.0 + 1e-9) + 1e-9,
             "{what}"
         );
+    }
+}
+
+/// `snake_folds`: the file allows exactly the pairs of a link and the next
+/// but one, which never touch within the limits (sampled here: every chord
+/// at least a link length from the next but one); starts and goals keep
+/// every checked pair apart, and goals are folded (two links far apart on
+/// the chain within two radius sums). The planner's runs are checked for
+/// self-collision with every family's above.
+#[test]
+fn snake_cases_fold_and_keep_their_links_apart() {
+    use capp_core::self_collision::pairs::PairStatus;
+    use capp_sim::geometry::{forward, segment_distance};
+    use capp_suite::families::scene::{closest_links, random_config};
+    use capp_suite::families::snake_folds::{FOLDED, FOLD_APART, JOINTS, LINK, LINK_MARGIN};
+    let f = family("snake_folds");
+    for (i, c) in families::cases(&f, SEED, JOINTS.len())
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let problem = case::parse(&c.text, &c.name).unwrap();
+        let n = problem.joints.len();
+        assert_eq!(n, JOINTS[i], "{}", c.name);
+        assert!(problem.links.enabled, "{}", c.name);
+        let table = problem.pair_table().unwrap();
+        for (a, b, status) in table.pairs() {
+            let want = match b - a {
+                1 => PairStatus::Adjacent,
+                2 => PairStatus::Allowed,
+                _ => PairStatus::Checked,
+            };
+            assert_eq!(status, want, "{}: links {} and {}", c.name, a + 1, b + 1);
+        }
+        let limits: Vec<(f64, f64)> = problem
+            .joints
+            .iter()
+            .map(|j| (j.min as f64, j.max as f64))
+            .collect();
+        let mut rng = Rng::new(7);
+        for _ in 0..200 {
+            let q = random_config(&mut rng, &limits, 1.0);
+            let (o, _) = forward(&problem, &q);
+            for k in 0..n - 2 {
+                let d = segment_distance(o[k], o[k + 1], o[k + 2], o[k + 3]).distance;
+                assert!(d >= LINK * (1.0 - 1e-5), "{}: links {k} +2: {d}", c.name);
+            }
+        }
+
+        let geometry = Geometry::new(&problem);
+        for (what, q) in [("start", &c.start), ("goal", &c.goal)] {
+            let g = closest_links(&problem, &geometry, q, 0).unwrap();
+            assert!(g.clearance >= LINK_MARGIN, "{} {what}: {g:?}", c.name);
+        }
+        let fold = closest_links(&problem, &geometry, &c.goal, FOLD_APART).unwrap();
+        assert!(fold.clearance <= FOLDED, "{}: {fold:?}", c.name);
     }
 }
 

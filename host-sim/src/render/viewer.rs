@@ -15,6 +15,17 @@
 //! their orientation when they have one); and each obstacle's surface as a
 //! `(lat + 1) x lon` grid of world points. The row where each escape started
 //! is always among the frames.
+//!
+//! The link capsules ([`capp_core::self_collision`]): `capsules`, each
+//! link's radius (link `k` is the chord between origins `o_k` and
+//! `o_{k+1}`, so the page draws it from the frames it already has);
+//! `self_collision`, whether the scenario keeps them apart; and
+//! `closest_links`, per frame, the closest pair the scenario checks as
+//! `[a, b, gap]` (DH link numbers, the capsules' distance in length units;
+//! `null` when no pair is checked). The page draws the capsules as
+//! see-through tubes with round ends, the closest checked pair in red,
+//! behind a checkbox (off when the page opens; `c` toggles it,
+//! `viewer.html#capsules` opens with them shown).
 
 use std::fmt::Write as _;
 
@@ -22,7 +33,7 @@ use super::canvas::escape;
 use super::chart::nice_step;
 use super::views::{bounds, escape_color, frames, origins, surface};
 use crate::escapes::{classify, side_name, Kind};
-use crate::geometry::forward;
+use crate::geometry::{forward, Geometry};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -109,6 +120,25 @@ pub fn escape_phrase(problem: &Problem, state: capp_core::escape::EscapeState) -
 
 fn hex(c: [u8; 3]) -> String {
     format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
+/// Per frame (origins `frames`), the closest pair of links the scenario
+/// checks, by the independent model ([`Geometry::link_gaps`], as the
+/// summary names it): DH link numbers (1-based) and the capsules' distance;
+/// `None` for every frame when no pair is checked.
+pub fn closest_links(
+    problem: &Problem,
+    frames: &[&[[f64; 3]]],
+) -> Vec<Option<(usize, usize, f64)>> {
+    let geometry = Geometry::new(problem);
+    frames
+        .iter()
+        .map(|o| {
+            geometry
+                .worst_gap(&geometry.link_gaps(o))
+                .map(|g| (g.links.0 + 1, g.links.1 + 1, g.gap))
+        })
+        .collect()
 }
 
 /// The `RUN` object.
@@ -223,6 +253,23 @@ pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
             .flat_map(move |c| (0..3).map(move |r| Some(m[r][c])))
     });
     let _ = writeln!(s, "\"end_axes\": {},", list(axes));
+    let _ = writeln!(
+        s,
+        "\"capsules\": {},",
+        list(problem.links.radius.iter().map(|&r| Some(r as f64)))
+    );
+    let _ = writeln!(s, "\"self_collision\": {},", problem.links.enabled);
+    let shown: Vec<&[[f64; 3]]> = picks.iter().map(|&k| origins[k].as_slice()).collect();
+    let pairs: Vec<String> = closest_links(problem, &shown)
+        .into_iter()
+        .map(|p| match p {
+            Some((a, b, gap)) => {
+                format!("[{a},{b},{}]", list([Some(gap)]).trim_matches(['[', ']']))
+            }
+            None => "null".into(),
+        })
+        .collect();
+    let _ = writeln!(s, "\"closest_links\": [{}],", pairs.join(","));
     let stride = (origins.len() / 2000).max(1);
     let path = origins
         .iter()
@@ -291,6 +338,7 @@ td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: ta
 .swatch {{ display: inline-block; width: 12px; height: 12px; margin-right: 6px; vertical-align: -1px; border-radius: 2px; }}
 #legend div {{ margin: 2px 0; }}
 #escape {{ margin: -4px 0 8px; min-height: 16px; }}
+#options {{ margin: -2px 0 8px; }} #options input {{ margin: 0 4px 0 0; vertical-align: -2px; }}
 .help {{ color: #667; font-size: 11px; margin-top: 8px; }}
 </style></head>
 <body>
@@ -298,10 +346,11 @@ td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: ta
 <div id="hud">
 <h1>{name}</h1>
 <div id="controls"><button id="play">pause</button><input id="seek" type="range" min="0" value="0"></div>
+<div id="options"><label><input type="checkbox" id="capsules"> link capsules (what self-collision keeps apart)</label></div>
 <table id="now"></table>
 <div id="escape"><span class="swatch" id="escape-swatch"></span><span id="escape-text"></span></div>
 <div id="legend"></div>
-<div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view &middot; viewer.html#frame=N opens at frame N</div>
+<div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view &middot; c: link capsules &middot; viewer.html#frame=N opens at frame N, #capsules with the capsules shown</div>
 </div>
 <script>
 {three}

@@ -66,6 +66,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
         )],
         unit: Unit::Metres,
         robot: RobotSpec::Table(joints()),
+        robot_settings: Vec::new(),
         start: vec![0.0; 7],
         target: [0.0; 3],
         orientation: None,

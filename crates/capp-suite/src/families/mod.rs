@@ -7,6 +7,7 @@
 //! | [`pips_free`] | PIPS | none | pose over the reachable workspace |
 //! | [`iiwa_shelves`] | KUKA LBR iiwa 7 (metres) | table, shelf unit, boxes in the way | pose |
 //! | [`planar_posts`] | the planar 3-link arm (metres) | round posts | position |
+//! | [`snake_folds`] | a 12- to 24-joint snake (metres), its links kept apart | floor, pedestal, a ring of posts, boxes in the way | pose or position near its own base, behind it, inside the ring |
 //!
 //! Every case is built the same way ([`scene`]): a scene, a start (home or a
 //! random configuration), a goal configuration, both within limits and clear
@@ -22,6 +23,7 @@ pub mod pips_bay;
 pub mod pips_free;
 pub mod planar_posts;
 pub mod scene;
+pub mod snake_folds;
 
 use anyhow::{bail, Result};
 
@@ -48,6 +50,7 @@ pub fn families() -> Vec<Family> {
         pips_free::FAMILY,
         iiwa_shelves::FAMILY,
         planar_posts::FAMILY,
+        snake_folds::FAMILY,
     ]
 }
 

@@ -46,6 +46,7 @@ pub fn spec(name: &str, description: &str, start: &[f64], tol: f64, otol: f64) -
         )],
         unit: Unit::Inches,
         robot: RobotSpec::Pips,
+        robot_settings: Vec::new(),
         start: start.to_vec(),
         target: [0.0; 3],
         orientation: None,

@@ -59,6 +59,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
         )],
         unit: Unit::Metres,
         robot: RobotSpec::Table(joints()),
+        robot_settings: Vec::new(),
         start: home.clone(),
         target: [0.0; 3],
         orientation: None,

@@ -1,6 +1,12 @@
 //! What every family does the same way: a draft scene with its independent
 //! geometry, random configurations within limits and clear of it, obstacles
 //! placed in the way, and the finished, re-read and validated case file.
+//!
+//! A family may also ask that its configurations keep the links apart
+//! ([`Draft::keep_links_apart`]): then "clear" also means that every pair of
+//! links the scenario checks (its allowed-collision matrix, as `capp acm`
+//! prints it) keeps its capsules `gap >= margin (r_a + r_b)` apart, by the
+//! independent `f64` model's capsules ([`Geometry::link_gaps`]).
 
 use capp_core::SuperEllipsoid;
 use capp_sim::geometry::{forward, Geometry};
@@ -21,6 +27,46 @@ pub struct Draft {
     pub spec: Spec,
     problem: Problem,
     geometry: Geometry,
+    /// The smallest link clearance starts and goals keep, when the family
+    /// asks for it ([`Draft::keep_links_apart`]).
+    link_margin: Option<f64>,
+}
+
+/// The closest checked pair of links of a configuration, with the
+/// planner's dimensionless clearance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkClearance {
+    /// The two links, 0-based (DH links `a + 1`, `b + 1`).
+    pub links: (usize, usize),
+    /// Distance between their capsules (the chords' distance less both radii), length units.
+    pub gap: f64,
+    /// `gap / (r_a + r_b)`, as the planner measures a link pair.
+    pub clearance: f64,
+}
+
+/// The closest pair of links at `q` among those `geometry` checks (the
+/// scenario's allowed-collision matrix) at least `apart` links apart on the
+/// chain (`b - a >= apart`); `None` when there is none. `problem` gives the
+/// radii.
+pub fn closest_links(
+    problem: &Problem,
+    geometry: &Geometry,
+    q: &[f64],
+    apart: usize,
+) -> Option<LinkClearance> {
+    let (origins, _) = geometry.forward(q);
+    let radius = |k: usize| problem.links.radius.get(k).map_or(0.0, |&r| r as f64);
+    geometry
+        .checked_pairs()
+        .iter()
+        .zip(geometry.link_gaps(&origins))
+        .filter(|(&(a, b), _)| b - a >= apart)
+        .map(|(&(a, b), gap)| LinkClearance {
+            links: (a, b),
+            gap,
+            clearance: gap / (radius(a) + radius(b)),
+        })
+        .min_by(|x, y| x.clearance.total_cmp(&y.clearance))
 }
 
 impl Draft {
@@ -32,7 +78,33 @@ impl Draft {
             spec,
             problem,
             geometry,
+            link_margin: None,
         })
+    }
+
+    /// From now on a configuration is clear only if every pair of links the
+    /// scenario checks keeps `gap / (r_a + r_b) >= margin` (see
+    /// [`Draft::link_gap`]). `None` when the scenario has no self-collision
+    /// checks.
+    pub fn keep_links_apart(&mut self, margin: f64) -> Option<()> {
+        self.geometry.self_collision().then(|| {
+            self.link_margin = Some(margin);
+        })
+    }
+
+    /// The closest checked pair of links at `q` at least `apart` links
+    /// apart on the chain ([`closest_links`]).
+    pub fn link_gap(&self, q: &[f64], apart: usize) -> Option<LinkClearance> {
+        closest_links(&self.problem, &self.geometry, q, apart)
+    }
+
+    /// Whether the links at `q` keep the margin of [`Draft::keep_links_apart`]
+    /// (always, when not asked).
+    pub fn links_apart(&self, q: &[f64]) -> bool {
+        match self.link_margin {
+            Some(margin) => self.link_gap(q, 0).is_none_or(|g| g.clearance >= margin),
+            None => true,
+        }
     }
 
     /// The loaded problem of the draft.
@@ -70,9 +142,13 @@ impl Draft {
         self.geometry = Geometry::new(&self.problem);
     }
 
-    /// Whether `q` is within limits and clear of every obstacle by [`CLEAR_MARGIN`].
+    /// Whether `q` is within limits and clear of every obstacle by
+    /// [`CLEAR_MARGIN`] (and its links apart, when the family asked:
+    /// [`Draft::keep_links_apart`]).
     pub fn clear(&self, q: &[f64]) -> bool {
-        within_limits(&self.problem, q) && self.geometry.is_clear(q, CLEAR_MARGIN)
+        within_limits(&self.problem, q)
+            && self.geometry.is_clear(q, CLEAR_MARGIN)
+            && self.links_apart(q)
     }
 
     /// Adds `o` if every configuration in `keep` stays clear; returns whether it did.
@@ -211,7 +287,9 @@ impl Draft {
         problem.validate().ok()?;
         let geometry = Geometry::new(&problem);
         let start_read: Vec<f64> = problem.start.iter().map(|&x| x as f64).collect();
-        let ok = |q: &[f64]| within_limits(&problem, q) && geometry.is_clear(q, CLEAR_MARGIN);
+        let ok = |q: &[f64]| {
+            within_limits(&problem, q) && geometry.is_clear(q, CLEAR_MARGIN) && self.links_apart(q)
+        };
         if start_read != start || !ok(start) || !ok(goal) {
             return None;
         }
