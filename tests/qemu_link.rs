@@ -81,6 +81,8 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
     let start = pips::home();
     let upload = Upload {
         joints: &joints,
+        capsule_radius: &[],
+        capsule_rows: &[],
         obstacles: &[],
         waypoints: &waypoints,
         joint_goals: &[],
@@ -232,6 +234,8 @@ fn commands_sent_while_a_plan_runs_are_all_answered() {
     assert!(expected.len() > 1000, "{} steps", expected.len());
     link.upload(&Upload {
         joints: &joints,
+        capsule_radius: &[],
+        capsule_rows: &[],
         obstacles: &[],
         waypoints: &waypoints,
         joint_goals: &[],

@@ -200,6 +200,8 @@ pub fn plan_on_board<T: Read + Write>(
     }
     link.upload(&Upload {
         joints: &problem.joints,
+        capsule_radius: scenario.capsules().radii(),
+        capsule_rows: scenario.capsules().checked_rows(),
         obstacles: &problem.obstacles,
         waypoints: &problem.waypoints,
         joint_goals: &problem.joint_goals,

@@ -91,6 +91,13 @@ impl FrameErrors {
 pub struct Upload<'a> {
     /// The robot's joints.
     pub joints: &'a [capp_core::Joint],
+    /// The link capsules' radii, one per joint, or none: no self-collision
+    /// checks (the host's `Scenario::capsules().radii()`, so the board's
+    /// scenario is the host's to the bit).
+    pub capsule_radius: &'a [f32],
+    /// The checked pairs, one row per link as the radii
+    /// (`Scenario::capsules().checked_rows()`).
+    pub capsule_rows: &'a [u64],
     /// The obstacles.
     pub obstacles: &'a [capp_core::SuperEllipsoid],
     /// The waypoints (the last is the target).
@@ -308,6 +315,12 @@ impl<T: Read + Write> Link<T> {
         {
             return Err(LinkError::TooLarge("joints"));
         }
+        if upload.capsule_radius.len() != upload.capsule_rows.len() {
+            return Err(LinkError::TooLarge("capsule rows"));
+        }
+        if upload.capsule_radius.len() > capp_proto::MAX_JOINTS {
+            return Err(LinkError::TooLarge("capsules"));
+        }
         if upload.obstacles.len() > capp_proto::MAX_OBSTACLES {
             return Err(LinkError::TooLarge("obstacles"));
         }
@@ -319,6 +332,17 @@ impl<T: Read + Write> Link<T> {
             self.expect_ack(&Command::Joint {
                 index: i as u8,
                 joint: (*j).into(),
+            })?;
+        }
+        for (i, (&radius, &checked)) in upload
+            .capsule_radius
+            .iter()
+            .zip(upload.capsule_rows)
+            .enumerate()
+        {
+            self.expect_ack(&Command::Capsule {
+                index: i as u8,
+                capsule: capp_proto::Capsule { radius, checked },
             })?;
         }
         for (i, o) in upload.obstacles.iter().enumerate() {

@@ -107,6 +107,8 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
     let waypoints = [target()];
     link.upload(&Upload {
         joints: &joints,
+        capsule_radius: &[],
+        capsule_rows: &[],
         obstacles: &[],
         waypoints: &waypoints,
         joint_goals: &[],

@@ -100,6 +100,10 @@ struct Draft {
     /// `None`: the defaults (kept as `None` so `Draft::new` can be `const`).
     settings: Option<capp_core::Settings>,
     start: Vec<f32, N>,
+    /// Link capsules, one per joint or none (self-collision off): radii and
+    /// checked-pair rows, as `Scenario::set_link_capsules` takes them.
+    capsule_radius: Vec<f32, N>,
+    capsule_rows: Vec<u64, N>,
 }
 
 impl Draft {
@@ -111,6 +115,8 @@ impl Draft {
             joint_goals: Vec::new(),
             settings: None,
             start: Vec::new(),
+            capsule_radius: Vec::new(),
+            capsule_rows: Vec::new(),
         }
     }
 
@@ -123,6 +129,8 @@ impl Draft {
             joint_goals,
             settings,
             start,
+            capsule_radius,
+            capsule_rows,
         } = self;
         joints.clear();
         obstacles.clear();
@@ -130,6 +138,14 @@ impl Draft {
         joint_goals.clear();
         *settings = None;
         start.clear();
+        capsule_radius.clear();
+        capsule_rows.clear();
+    }
+
+    /// No capsules: self-collision off.
+    fn clear_capsules(&mut self) {
+        self.capsule_radius.clear();
+        self.capsule_rows.clear();
     }
 }
 
@@ -435,17 +451,21 @@ impl<const TXQ: usize> Node<TXQ> {
                 Part::Robot => {
                     d.joints.clear();
                     d.start.clear();
+                    d.clear_capsules();
                 }
                 Part::Obstacles => d.obstacles.clear(),
                 Part::Waypoints => {
                     d.waypoints.clear();
                     d.joint_goals.clear();
                 }
+                Part::Capsules => d.clear_capsules(),
             },
             Command::Preset(Preset::Pips) => {
                 let joints = capp_core::pips::joints();
                 d.joints.clear();
                 d.start.clear();
+                // The old robot's capsules do not fit the preset.
+                d.clear_capsules();
                 for (j, q) in joints.iter().zip(capp_core::pips::home()) {
                     let _ = d.joints.push(*j);
                     let _ = d.start.push(q);
@@ -487,6 +507,12 @@ impl<const TXQ: usize> Node<TXQ> {
                     true,
                 )?;
                 let _ = d.joint_goals.push((*index, joints.clone()));
+            }
+            Command::Capsule { index, capsule } => {
+                let finite = capsule.radius.is_finite();
+                append(&mut d.capsule_radius, *index, capsule.radius, finite)?;
+                // The same length as the radii: it cannot be full.
+                let _ = d.capsule_rows.push(capsule.checked);
             }
             Command::Settings(s) => {
                 let s = capp_core::Settings::from(*s);
@@ -550,6 +576,13 @@ impl<const TXQ: usize> Node<TXQ> {
         for (waypoint, joints) in &d.joint_goals {
             plan.scenario
                 .set_joint_goal(*waypoint as usize, joints)
+                .map_err(scenario_refusal)?;
+        }
+        // Bit for bit the host's capsules (`Scenario::capsules` there); none
+        // sent, none checked.
+        if !d.capsule_radius.is_empty() {
+            plan.scenario
+                .set_link_capsules(&d.capsule_radius, &d.capsule_rows)
                 .map_err(scenario_refusal)?;
         }
         plan.planner
@@ -789,7 +822,7 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
                 C::BadRadius { link } | C::BadPair { link } => link,
                 C::WrongLength { .. } | C::TooManyLinks { .. } => NO_INDEX,
             };
-            (ErrorCode::InvalidRobot, index)
+            (ErrorCode::InvalidCapsules, index)
         }
     }
 }

@@ -565,3 +565,290 @@ fn a_joint_space_waypoint_is_planned_as_the_host_plans_it() {
         "{r:?}"
     );
 }
+
+/// PIPS's link capsules as the host computes them (`capp run`'s defaults:
+/// radius 1.5 in, the preset's allowed pairs, the pair table's seed 1).
+fn pips_capsules() -> (Vec<f32>, Vec<u64>) {
+    use capp_core::self_collision::pairs::{PairTable, SAMPLES};
+    let robot = pips::robot::<32>().unwrap();
+    let radius = std::vec![pips::LINK_RADIUS; pips::JOINTS];
+    let allowed: Vec<(u8, u8)> = pips::allowed_pairs().collect();
+    let table = PairTable::new(&robot, &radius, &allowed, &pips::home(), SAMPLES, 1).unwrap();
+    (radius, table.checked_rows().to_vec())
+}
+
+fn capsule_commands(radius: &[f32], rows: &[u64]) -> Vec<Command> {
+    radius
+        .iter()
+        .zip(rows)
+        .enumerate()
+        .map(|(i, (&radius, &checked))| Command::Capsule {
+            index: i as u8,
+            capsule: capp_proto::Capsule { radius, checked },
+        })
+        .collect()
+}
+
+/// `(command, code, index)` of each reply; an ack as `(command, Framing, 0xAA)`.
+fn outcomes(got: &[Reply]) -> Vec<(u8, ErrorCode, u8)> {
+    got.iter()
+        .filter(|r| !matches!(r, Reply::Setpoint { .. } | Reply::Status(_)))
+        .map(|r| match r {
+            Reply::Error {
+                command,
+                code,
+                index,
+            } => (*command, *code, *index),
+            Reply::Ack { command } => (*command, ErrorCode::Framing, 0xAA),
+            other => panic!("{other:?}"),
+        })
+        .collect()
+}
+
+#[test]
+fn link_capsules_reach_the_boards_scenario_bit_for_bit() {
+    // PIPS with its capsules and checked pairs: the board's scenario holds
+    // the host's radii and rows to the bit, and plans the host's plan.
+    let (radius, rows) = pips_capsules();
+    assert!(rows.iter().any(|r| *r != 0));
+    let mut uart = FakeUart::new(usize::MAX);
+    for c in load_commands()
+        .into_iter()
+        .chain(capsule_commands(&radius, &rows))
+    {
+        uart.send(&c);
+    }
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    let mut node = Node::<2048>::new();
+    let got = exchange(&mut node, &mut uart);
+    assert!(
+        outcomes(&got).iter().all(|o| o.1 == ErrorCode::Framing),
+        "{got:?}"
+    );
+    let capsules = node.plan.scenario.capsules();
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(capsules.radii()), bits(&radius));
+    assert_eq!(capsules.checked_rows(), rows.as_slice());
+    // The host's plan with the same capsules.
+    let robot = Robot::<32>::new(&pips::joints()).unwrap();
+    let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
+    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    scenario.set_link_capsules(&radius, &rows).unwrap();
+    let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
+    let mut expected = std::vec![planner.joints().to_vec()];
+    planner
+        .run(&scenario, |p, _| expected.push(p.joints().to_vec()))
+        .unwrap();
+    uart.tx.clear();
+    for _ in 0..100_000 {
+        node.tick(1);
+        node.poll(&mut uart);
+        if node.status().state != State::Running && node.tx_len() == 0 {
+            break;
+        }
+    }
+    let streamed: Vec<Vec<u32>> = replies(&uart.tx)
+        .into_iter()
+        .filter_map(|r| match r {
+            Reply::Setpoint { joints, .. } => Some(bits(&joints)),
+            _ => None,
+        })
+        .collect();
+    let expected: Vec<Vec<u32>> = expected.iter().map(|q| bits(q)).collect();
+    assert_eq!(streamed, expected);
+    assert_eq!(node.status().outcome, Some(Outcome::Reached));
+
+    // Clear(Capsules): the next plan checks no pairs; capsules sent again do.
+    uart.send(&Command::Clear(Part::Capsules));
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(
+        outcomes(&got),
+        [
+            (1, ErrorCode::Framing, 0xAA),
+            (8, ErrorCode::Framing, 0xAA)
+        ]
+    );
+    assert!(!node.plan.scenario.capsules().is_on());
+    uart.send(&Command::Stop);
+    for c in capsule_commands(&radius, &rows) {
+        uart.send(&c);
+    }
+    // The preset replaces the robot: its old capsules go with it.
+    uart.send(&Command::Preset(Preset::Pips));
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    exchange(&mut node, &mut uart);
+    assert_eq!(node.status().state, State::Running);
+    assert!(!node.plan.scenario.capsules().is_on());
+}
+
+#[test]
+fn bad_link_capsules_are_refused_with_the_link() {
+    let (radius, rows) = pips_capsules();
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    // A good plan first: refusals leave its status as it is.
+    load(&mut uart);
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    exchange(&mut node, &mut uart);
+    while node.status().state == State::Running {
+        node.tick(1);
+    }
+    exchange(&mut node, &mut uart);
+    let done = *node.status();
+    let run = Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    let capsule = |index: u8, radius: f32, checked: u64| Command::Capsule {
+        index,
+        capsule: capp_proto::Capsule { radius, checked },
+    };
+    // On arrival: a radius that is not a number, a capsule out of order.
+    uart.send(&capsule(0, f32::NAN, rows[0]));
+    uart.send(&capsule(1, 1.5, rows[1]));
+    assert_eq!(
+        outcomes(&exchange(&mut node, &mut uart)),
+        [(12, ErrorCode::NotFinite, 0), (12, ErrorCode::OutOfOrder, 1)]
+    );
+    // At `Run`, against the robot: link 4's radius 0, negative, too large;
+    // link 6 naming itself, a link before it, a link PIPS does not have.
+    let refused = |bad: Command, node: &mut Node<2048>, uart: &mut FakeUart| {
+        uart.send(&Command::Clear(Part::Capsules));
+        let mut commands = capsule_commands(&radius, &rows);
+        let Command::Capsule { index, .. } = bad else {
+            panic!()
+        };
+        commands[index as usize] = bad;
+        for c in &commands {
+            uart.send(c);
+        }
+        uart.send(&run);
+        let got = outcomes(&exchange(node, uart));
+        assert!(got[..got.len() - 1]
+            .iter()
+            .all(|o| o.1 == ErrorCode::Framing));
+        got[got.len() - 1]
+    };
+    let radius4 = [0.0, -1.5, 2.0e4];
+    for r in radius4 {
+        assert_eq!(
+            refused(capsule(4, r, rows[4]), &mut node, &mut uart),
+            (8, ErrorCode::InvalidCapsules, 4),
+            "radius {r}"
+        );
+    }
+    for row in [rows[6] | 1 << 6, rows[6] | 1 << 2, rows[6] | 1 << 18] {
+        assert_eq!(
+            refused(capsule(6, 1.5, row), &mut node, &mut uart),
+            (8, ErrorCode::InvalidCapsules, 6),
+            "row {row:#x}"
+        );
+    }
+    // Not one capsule per joint.
+    uart.send(&Command::Clear(Part::Capsules));
+    for c in capsule_commands(&radius[..17], &rows[..17]) {
+        uart.send(&c);
+    }
+    uart.send(&run);
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(8, ErrorCode::InvalidCapsules, NO_INDEX)));
+    // A 33rd capsule does not fit.
+    uart.send(&Command::Clear(Part::Capsules));
+    for i in 0..33u8 {
+        uart.send(&capsule(i, 1.5, 0));
+    }
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(12, ErrorCode::Capacity, 32)));
+    // Nothing changed the last plan's status.
+    assert_eq!(
+        Status {
+            rx_errors: done.rx_errors,
+            ..*node.status()
+        },
+        done
+    );
+    // And the good capsules run.
+    uart.send(&Command::Clear(Part::Capsules));
+    for c in capsule_commands(&radius, &rows) {
+        uart.send(&c);
+    }
+    uart.send(&run);
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(8, ErrorCode::Framing, 0xAA)));
+    assert_eq!(node.status().state, State::Running);
+}
+
+#[test]
+fn a_start_in_self_collision_is_refused() {
+    // A planar arm of three 1 m links folded so that its first and last
+    // links cross: with their pair checked, `Run` is refused; with no
+    // capsules the same start runs.
+    let joint = capp_proto::Joint {
+        kind: capp_proto::JointKind::Revolute,
+        alpha: 0.0,
+        a: 1.0,
+        theta: 0.0,
+        d: 0.0,
+        min: -3.1,
+        max: 3.1,
+        max_rate: 1.0,
+        weight: 1.0,
+    };
+    let start = [0.0, 2.9, 2.9];
+    let robot = Robot::<32>::new(&[capp_core::Joint::from(joint); 3]).unwrap();
+    let mission = Mission::<16>::new(
+        &[capp_core::Waypoint::at([1.0, 1.0, 0.0])],
+        capp_core::Settings::for_robot(&robot),
+    )
+    .unwrap();
+    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    scenario
+        .set_link_capsules(&[0.1; 3], &[1 << 2, 0, 0])
+        .unwrap();
+    assert!(matches!(
+        Planner::new(&scenario, &start),
+        Err(capp_core::StartError::SelfCollision { links: [0, 2] })
+    ));
+    let mut uart = FakeUart::new(usize::MAX);
+    let mut commands = std::vec![Command::Clear(Part::All)];
+    for i in 0..3 {
+        commands.push(Command::Joint { index: i, joint });
+    }
+    commands.extend(capsule_commands(&[0.1; 3], &[1 << 2, 0, 0]));
+    commands.push(Command::Waypoint {
+        index: 0,
+        waypoint: capp_core::Waypoint::at([1.0, 1.0, 0.0]).into(),
+    });
+    commands.push(Command::Settings((*scenario.settings()).into()));
+    commands.push(Command::Start(Joints::from_slice(&start).unwrap()));
+    commands.push(Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    for c in &commands {
+        uart.send(c);
+    }
+    let mut node = Node::<2048>::new();
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(8, ErrorCode::InvalidStart, NO_INDEX)));
+    uart.send(&Command::Clear(Part::Capsules));
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(8, ErrorCode::Framing, 0xAA)));
+}

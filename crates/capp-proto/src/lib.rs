@@ -37,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 5;
+pub const VERSION: u8 = 6;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -202,18 +202,35 @@ pub enum Preset {
     Pips,
 }
 
+/// The capsule round one link and the pairs it is checked against
+/// (capp-core's `self_collision::LinkCapsules`, one link of it; since version 6).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Capsule {
+    /// Radius of the capsule round the link's chord, length units (positive
+    /// and finite).
+    pub radius: f32,
+    /// The links this one is checked against: bit `b` set when the pair
+    /// (this link, `b`) is checked; only links after this one (`b > index`).
+    pub checked: u64,
+}
+
 /// Which part of the load [`Command::Clear`] empties.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Part {
-    /// Everything: joints, obstacles, waypoints, start; settings to defaults.
+    /// Everything: joints, capsules, obstacles, waypoints, start; settings
+    /// to defaults.
     All,
-    /// The joints (and the start).
+    /// The joints (and the start and the capsules).
     Robot,
     /// The obstacles.
     Obstacles,
     /// The waypoints.
     Waypoints,
+    /// The link capsules: self-collision off until capsules are sent again
+    /// (since version 6).
+    Capsules,
 }
 
 /// Host to board. Each is answered by exactly one reply: [`Reply::Pong`] for
@@ -277,6 +294,16 @@ pub enum Command {
         /// The configuration, radians or length units.
         joints: Joints,
     },
+    /// 12: append the capsule of link `index` (the link after joint `index`);
+    /// `index` must equal the number of capsules loaded (since version 6).
+    /// A load with capsules has one per joint and checks self-collision; a
+    /// load without any does not.
+    Capsule {
+        /// The link (0-based): the link after joint `index`.
+        index: u8,
+        /// Its radius and checked pairs.
+        capsule: Capsule,
+    },
 }
 
 impl Command {
@@ -295,6 +322,7 @@ impl Command {
             Command::Stop => 9,
             Command::Status => 10,
             Command::JointWaypoint { .. } => 11,
+            Command::Capsule { .. } => 12,
         }
     }
 }
@@ -331,6 +359,10 @@ pub enum ErrorCode {
     Busy,
     /// 13: `Stop` while no plan runs.
     NotRunning,
+    /// 14: the link capsules failed validation (`index` = the link, or
+    /// `NO_INDEX` when their number is not the number of joints; since
+    /// version 6).
+    InvalidCapsules,
 }
 
 /// Where the board is.

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 05 00 01, CRC-32 0x8e8d2b6f (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 06 00 01, CRC-32 0x8ccb9536 (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x05, 0x06, 0x01, 0x6f, 0x2b, 0x8d, 0x8e, 0x00]
+        &[0x02, 0x06, 0x06, 0x01, 0x36, 0x95, 0xcb, 0x8c, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x05, 0x01, 0x08, 0x8a, 0xa2, 0x4a, 0xee, 0x00]
+        &[0x08, 0x06, 0x01, 0x08, 0xd3, 0x1c, 0x0c, 0xec, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x05, 0x02, 0xff, 0x01, 0xff, 0xc7, 0x5a, 0x4a, 0x2e, 0x00]
+        &[0x0a, 0x06, 0x02, 0xff, 0x01, 0xff, 0x17, 0x20, 0xea, 0x69, 0x00]
     );
 }
 
@@ -72,6 +72,7 @@ fn every_command_is_pinned() {
     check(&Command::Clear(Part::Robot), &[0x01, 0x01]);
     check(&Command::Clear(Part::Obstacles), &[0x01, 0x02]);
     check(&Command::Clear(Part::Waypoints), &[0x01, 0x03]);
+    check(&Command::Clear(Part::Capsules), &[0x01, 0x04]);
     check(&Command::Preset(Preset::Pips), &[0x02, 0x00]);
     let joint = Joint {
         kind: JointKind::Prismatic,
@@ -255,6 +256,31 @@ fn every_command_is_pinned() {
         },
         &cat(&[&[0x0B, 0x02, 0x02], &HALF, &MINUS_ONE]),
     );
+    // Link 2's capsule, radius 1.5, checked against links 4 and 31: the row
+    // 0x8000_0010 as a varint.
+    check(
+        &Command::Capsule {
+            index: 2,
+            capsule: Capsule {
+                radius: 1.5,
+                checked: (1 << 4) | (1 << 31),
+            },
+        },
+        &[
+            0x0C, 0x02, 0x00, 0x00, 0xC0, 0x3F, 0x90, 0x80, 0x80, 0x80, 0x08,
+        ],
+    );
+    // No pair: one byte.
+    check(
+        &Command::Capsule {
+            index: 31,
+            capsule: Capsule {
+                radius: 1.5,
+                checked: 0,
+            },
+        },
+        &[0x0C, 0x1F, 0x00, 0x00, 0xC0, 0x3F, 0x00],
+    );
 }
 
 /// capp-core's defaults, through the `core` conversion: the same bytes as above.
@@ -273,7 +299,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x05, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x06, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -291,6 +317,7 @@ fn every_reply_is_pinned() {
         ErrorCode::InvalidStart,
         ErrorCode::Busy,
         ErrorCode::NotRunning,
+        ErrorCode::InvalidCapsules,
     ]
     .into_iter()
     .enumerate()
@@ -420,6 +447,15 @@ fn the_largest_messages_fit_a_frame() {
     assert!(n <= MAX_FRAME);
     let n = encode(&Command::Start(full), &mut f).unwrap();
     assert!(n <= MAX_FRAME);
+    let capsule = Command::Capsule {
+        index: u8::MAX,
+        capsule: Capsule {
+            radius: f32::MAX,
+            checked: u64::MAX,
+        },
+    };
+    let n = encode(&capsule, &mut f).unwrap();
+    assert!(n <= MAX_FRAME);
     // Too many joints for the wire: 33 values do not decode.
     let mut body = vec![VERSION, 0x07, 33];
     body.extend(std::iter::repeat_n(0x3Fu8, 33 * 4));
@@ -465,7 +501,13 @@ fn bad_frames_are_reported_not_decoded() {
         Err(FrameError::Version { got: 1 })
     );
     // Unknown variant, trailing bytes, truncated payload.
-    for body in [&[VERSION, 11][..], &[VERSION, 9, 0], &[VERSION, 8]] {
+    for body in [
+        &[VERSION, 11][..],
+        &[VERSION, 13],
+        &[VERSION, 9, 0],
+        &[VERSION, 8],
+        &[VERSION, 12, 0, 0, 0, 0xC0],
+    ] {
         let mut r = raw_frame(body);
         let l = r.len() - 1;
         assert_eq!(
@@ -504,6 +546,15 @@ fn sample_commands() -> Vec<Command> {
         Command::Stop,
         Command::Status,
     ];
+    for i in 0..18u8 {
+        v.push(Command::Capsule {
+            index: i,
+            capsule: Capsule {
+                radius: 1.5,
+                checked: !((2u64 << i) - 1) & ((1 << 18) - 1),
+            },
+        });
+    }
     for i in 0..18u8 {
         let x = i as f32;
         v.push(Command::Joint {
