@@ -118,3 +118,16 @@ fn a_searched_path_on_the_board_is_the_host_plan() {
     let n = serial_matches_run("planar_search.toml", &elf);
     assert!(n > 1, "{n} setpoints");
 }
+
+/// Self-collision on the board (issue 25): the snake folded into a U reaches
+/// across its own links; the host uploads its link capsules and checked
+/// pairs (protocol 6), and the board's plan, which keeps every checked pair
+/// of capsules apart, is the host's to the bit.
+#[test]
+fn a_snake_kept_off_itself_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("snake_fold.toml", &elf);
+    assert!(n > 1, "{n} setpoints");
+}
