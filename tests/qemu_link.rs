@@ -163,6 +163,34 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
         },
         ErrorCode::InvalidRobot,
     );
+    // Link capsules with a radius of 0 (link 3's), then Run.
+    link.request(&Command::Clear(capp_proto::Part::Robot))
+        .unwrap();
+    for (i, j) in joints.iter().enumerate() {
+        link.request(&Command::Joint {
+            index: i as u8,
+            joint: (*j).into(),
+        })
+        .unwrap();
+        let capsule = capp_proto::Capsule {
+            radius: if i == 3 { 0.0 } else { 1.5 },
+            checked: 0,
+        };
+        link.request(&Command::Capsule {
+            index: i as u8,
+            capsule,
+        })
+        .unwrap();
+    }
+    match link.request(&Command::Run {
+        every: 1,
+        error_change: None,
+    }) {
+        Err(LinkError::Refused { command, code, index }) => {
+            assert_eq!((command, code, index), (8, ErrorCode::InvalidCapsules, 3))
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
     // The previous plan's status is kept.
     let s = link.status().unwrap();
     assert_eq!((s.state, s.outcome), (State::Done, Some(Outcome::Reached)));
