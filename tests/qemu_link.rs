@@ -186,7 +186,11 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
         every: 1,
         error_change: None,
     }) {
-        Err(LinkError::Refused { command, code, index }) => {
+        Err(LinkError::Refused {
+            command,
+            code,
+            index,
+        }) => {
             assert_eq!((command, code, index), (8, ErrorCode::InvalidCapsules, 3))
         }
         other => panic!("expected a refusal, got {other:?}"),

@@ -670,10 +670,7 @@ fn link_capsules_reach_the_boards_scenario_bit_for_bit() {
     let got = exchange(&mut node, &mut uart);
     assert_eq!(
         outcomes(&got),
-        [
-            (1, ErrorCode::Framing, 0xAA),
-            (8, ErrorCode::Framing, 0xAA)
-        ]
+        [(1, ErrorCode::Framing, 0xAA), (8, ErrorCode::Framing, 0xAA)]
     );
     assert!(!node.plan.scenario.capsules().is_on());
     uart.send(&Command::Stop);
@@ -721,7 +718,10 @@ fn bad_link_capsules_are_refused_with_the_link() {
     uart.send(&capsule(1, 1.5, rows[1]));
     assert_eq!(
         outcomes(&exchange(&mut node, &mut uart)),
-        [(12, ErrorCode::NotFinite, 0), (12, ErrorCode::OutOfOrder, 1)]
+        [
+            (12, ErrorCode::NotFinite, 0),
+            (12, ErrorCode::OutOfOrder, 1)
+        ]
     );
     // At `Run`, against the robot: link 4's radius 0, negative, too large;
     // link 6 naming itself, a link before it, a link PIPS does not have.
