@@ -316,7 +316,7 @@ impl<T: Read + Write> Link<T> {
             return Err(LinkError::TooLarge("joints"));
         }
         if upload.capsule_radius.len() != upload.capsule_rows.len() {
-            return Err(LinkError::TooLarge("capsule rows"));
+            return Err(LinkError::TooLarge("capsule rows (not one per radius)"));
         }
         if upload.capsule_radius.len() > capp_proto::MAX_JOINTS {
             return Err(LinkError::TooLarge("capsules"));

@@ -447,7 +447,9 @@ impl<const TXQ: usize> Node<TXQ> {
                 }))
             }
             Command::Clear(part) => match part {
-                Part::All => *d = Draft::new(),
+                // In place: a draft is 6 KiB, too big for a temporary on
+                // the serving loop's stack.
+                Part::All => d.clear(),
                 Part::Robot => {
                     d.joints.clear();
                     d.start.clear();
