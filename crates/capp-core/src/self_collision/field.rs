@@ -107,9 +107,16 @@ pub fn link_pairs<const N: usize>(
     let mut force = [Vec3::zeros(); N];
     let mut sliding = [Vec3::zeros(); N];
     let mut closest = f32::INFINITY;
-    for a in 0..n {
-        let mut row = capsules.checked[a];
-        let (m_a, reach_a, r_a) = (mid[a], capsules.reach[a], capsules.radius[a]);
+    // Zipped iterators, not indices: no bounds check, no panic path.
+    let links = capsules
+        .checked
+        .iter()
+        .zip(&capsules.reach)
+        .zip(capsules.radius.iter().zip(&mid))
+        .enumerate()
+        .take(n);
+    for (a, ((&checked, &reach_a), (&r_a, &m_a))) in links {
+        let mut row = checked;
         while row != 0 {
             let b = row.trailing_zeros() as usize;
             row &= row - 1;
@@ -161,8 +168,10 @@ pub fn link_pairs<const N: usize>(
             field.active_pairs = field.active_pairs.saturating_add(1);
             field.potential += 1.0 / c;
             let f_a = (pair.on_first - pair.on_second) * (-1.0 / (c * c * scale * distance));
-            force[a] += f_a;
-            sliding[a] += f_a * pair.s;
+            if let (Some(fa), Some(sa)) = (force.get_mut(a), sliding.get_mut(a)) {
+                *fa += f_a;
+                *sa += f_a * pair.s;
+            }
             if let (Some(fb), Some(sb)) = (force.get_mut(b), sliding.get_mut(b)) {
                 *fb -= f_a;
                 *sb -= f_a * pair.t;
