@@ -461,12 +461,14 @@ fn report_tables_are_well_formed() {
 }
 
 /// The planar arm of `capp-core`'s `planar_box_scenario` with a short post
-/// in its way, which the default planner passes by one detour.
+/// in its way, which the default planner passes by one detour. Its links lie
+/// in stacked layers (as `planar_search.toml`'s): link 3 may pass over link 1.
 const DETOUR: &str = "name = \"detour\"\nstart = [0.0, 0.5, 0.5]\n\
     [units]\nangle = \"radians\"\nlength = \"inches\"\n\
     [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
     [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
     [[robot.joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 10.0\nmin = -2.8\nmax = 2.8\nmax_rate = 0.5\n\
+    [[robot.allow]]\nlinks = [1, 3]\n\
     [target]\nposition = [24.2, -13.2, 0.0]\n\
     [[obstacles]]\nname = \"post\"\ncentre = [25.0, -0.5, 0.0]\nsemi_axes = [1.5, 1.5, 5.0]\nexponent = 8.0\n\
     [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n";
