@@ -447,3 +447,80 @@ fn toml_joint_waypoints() {
         "{end:?}"
     );
 }
+
+/// A third link (0.3 m), so that links 1 and 3 form a checked pair.
+const THIRD_JOINT: &str = r#"
+[[robot.joints]]
+name = "wrist"
+type = "revolute"
+alpha = 0.0
+a = 0.3
+theta = 0.0
+min = -175.0
+max = 175.0
+max_rate = 30.0
+"#;
+
+#[test]
+fn toml_bad_capsules_and_allowed_pairs() {
+    // A joint's radius: the line of its joint.
+    let text = planar(
+        &THIRD_JOINT.replace("max_rate = 30.0", "max_rate = 30.0\nradius = 0.0"),
+        PLANAR_TAIL,
+    );
+    rejects(
+        "r.toml",
+        &text,
+        24,
+        "link 3: the capsule radius must be positive and finite",
+    );
+    let text = planar(THIRD_JOINT, PLANAR_TAIL)
+        .replace("[units]", "[robot]\nlink_radius = -0.01\n\n[units]");
+    rejects(
+        "lr.toml",
+        &text,
+        2,
+        "robot.link_radius must be positive and finite",
+    );
+    // [[robot.allow]]: unknown names, links out of range, a link with itself.
+    for (allow, needle) in [
+        (
+            "links = [1, \"elbow\"]",
+            "robot.allow: unknown link \"elbow\"",
+        ),
+        (
+            "links = [1, 4]",
+            "robot.allow: link 4 does not exist (links are numbered 1 to 3)",
+        ),
+        (
+            "links = [\"wrist\", 3]",
+            "robot.allow: a link cannot be paired with itself (link 3)",
+        ),
+    ] {
+        let text = planar(
+            THIRD_JOINT,
+            &format!("\n[[robot.allow]]\n{allow}\n{PLANAR_TAIL}"),
+        );
+        rejects("a.toml", &text, 34, needle);
+    }
+}
+
+#[test]
+fn toml_start_in_self_collision_names_the_two_links() {
+    // Folded flat: the wrist link lies back across the first link.
+    let text = format!(
+        "start = [0.0, 170.0, 175.0]\n{}",
+        planar(THIRD_JOINT, PLANAR_TAIL)
+            .replace("min = -150.0\nmax = 150.0", "min = -175.0\nmax = 175.0")
+    );
+    rejects(
+        "s.toml",
+        &text,
+        1,
+        "start configuration puts link 1 into link 3 (after joint \"wrist\") (self-collision: their capsules touch)",
+    );
+    // Allowed, the same start is accepted (the pair is not checked).
+    let allowed = text.replace("[target]", "[[robot.allow]]\nlinks = [1, 3]\n\n[target]");
+    let dir = tempfile::tempdir().unwrap();
+    Problem::load(&write(&dir, "ok.toml", &allowed)).unwrap();
+}
