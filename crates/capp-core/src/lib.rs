@@ -26,6 +26,7 @@
 //! | [`mission`] | waypoints, tolerances and planner settings (each stage's settings validate themselves; [`settings_field`] names a bad one) |
 //! | [`scenario`] | robot + obstacles + mission, validated together |
 //! | [`planner`] | the per-step loop: evaluate, choose the drive goal, propose, bound, accept or shorten, account |
+//! | [`tracker`] | how fast: the joint drives' rate, acceleration and jerk limits, the jerk-limited, time-synchronised move toward the law's rates at a fixed control period, the stop at the limits and its travel |
 //! | [`setpoint`] | decimation of the joint stream, as the listing's `joints.dat` |
 //!
 //! Units: angles in radians, lengths in whatever unit the robot is described in
@@ -75,6 +76,7 @@ pub mod setpoint;
 pub mod settings_field;
 pub mod step_size;
 pub mod target;
+pub mod tracker;
 
 pub use mission::{Mission, MissionError, Settings, Waypoint};
 pub use obstacle::{ObstacleError, SuperEllipsoid};

@@ -1,0 +1,176 @@
+//! How fast: the tracker between the laws and the drives. The laws choose
+//! where to go (a joint rate); the tracker turns that into motion a joint
+//! drive can follow, at a fixed control period, within each joint's rate,
+//! acceleration and jerk limits ([`limits::DriveLimits`]), always able to
+//! stop within them (issue 22).
+//!
+//! * [`profile`]: one joint: the discrete model (the positions' own
+//!   differences are the velocity and acceleration), the time-optimal move
+//!   toward a velocity, the interval of accelerations after which the joint
+//!   can still stop within its limits, and a bound on its stopping travel;
+//! * [`DriveState`]: every joint's velocity and acceleration, the next tick
+//!   toward the law's rates (time-synchronised), the next tick of a stop,
+//!   and each joint's travel bound for the tick and the stop after it.
+//!
+//! ## Synchronisation
+//!
+//! A joint alone moves toward its target velocity as fast as its limits
+//! allow; left at that, a joint with more headroom gets there first and the
+//! arm's motion leaves the direction the law chose. So [`DriveState::toward`]
+//! removes the same fraction `rho` of every joint's velocity error in a
+//! tick: `rho` is the least of the fractions the joints could remove alone,
+//! and each joint's acceleration is `rho e_j / dt` within its viable
+//! interval. From rest the velocity then moves along the straight line to
+//! the target (tested), as Ruckig's phase synchronisation does (Berscheid
+//! and Kroger, RSS 2021). A joint whose own best move goes against its error
+//! (it must first take out an acceleration the other way) is left out of
+//! `rho` and moves alone.
+//!
+//! ## Stopping
+//!
+//! A stop ([`DriveState::braking`]) is every joint braking alone, as fast as
+//! its limits allow: a synchronised stop would hold the faster joints back
+//! and let them travel farther than [`profile::stopping_travel`] says.
+//! Each joint moves one way only during a stop, within that bound, whatever
+//! the other joints do; conservative advancement over those per-joint
+//! travels covers every configuration of the stop.
+
+pub mod limits;
+pub mod profile;
+
+use limits::DriveLimits;
+
+/// Every joint's velocity (per second) and acceleration (per second
+/// squared) after the last tick: with the joint positions, the state the
+/// next tick starts from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DriveState<const N: usize> {
+    n: usize,
+    velocity: [f32; N],
+    acceleration: [f32; N],
+}
+
+impl<const N: usize> DriveState<N> {
+    /// `n` joints (at most `N`) at rest.
+    pub fn at_rest(n: usize) -> Self {
+        DriveState {
+            n: n.min(N),
+            velocity: [0.0; N],
+            acceleration: [0.0; N],
+        }
+    }
+
+    /// The joints' velocities, per second.
+    pub fn velocity(&self) -> &[f32] {
+        &self.velocity[..self.n.min(N)]
+    }
+
+    /// The joints' accelerations, per second squared.
+    pub fn acceleration(&self) -> &[f32] {
+        &self.acceleration[..self.n.min(N)]
+    }
+
+    /// Whether every joint's `|velocity|` is at most `fraction` of its rate
+    /// limit and its acceleration at most `fraction` of its limit.
+    pub fn is_at_rest(&self, limits: &[DriveLimits], fraction: f32) -> bool {
+        self.velocity()
+            .iter()
+            .zip(self.acceleration())
+            .zip(limits)
+            .all(|((v, a), l)| {
+                v.abs() <= fraction * l.max_rate && a.abs() <= fraction * l.max_accel
+            })
+    }
+
+    /// The next tick toward the velocities `target` (per second; each
+    /// clamped to its rate limit), time-synchronised (module docs).
+    /// `limits` and `target` hold one value per joint.
+    pub fn toward(&self, limits: &[DriveLimits], dt: f32, target: &[f32]) -> Self {
+        let n = self.n.min(N);
+        let mut next = *self;
+        // The fraction of its velocity error each joint could remove alone.
+        let mut rho = 1.0f32;
+        for (((&v, &a), l), &t) in self.velocity[..n]
+            .iter()
+            .zip(&self.acceleration[..n])
+            .zip(limits)
+            .zip(target)
+        {
+            let e = clamp_rate(t, l) - v;
+            if e.abs() > SETTLED * l.max_rate {
+                let alone = profile::toward(v, a, v + e, l, dt) * dt / e;
+                if alone > 0.0 {
+                    rho = rho.min(alone);
+                }
+            }
+        }
+        for ((((v, a), l), &t), (&v0, &a0)) in next.velocity[..n]
+            .iter_mut()
+            .zip(&mut next.acceleration[..n])
+            .zip(limits)
+            .zip(target)
+            .zip(self.velocity[..n].iter().zip(&self.acceleration[..n]))
+        {
+            let e = clamp_rate(t, l) - v0;
+            let alone = profile::toward(v0, a0, v0 + e, l, dt);
+            let (low, high) = profile::viable(v0, a0, l, dt);
+            let synced = if alone * e > 0.0 {
+                (rho * e / dt).max(low).min(high)
+            } else {
+                alone
+            };
+            *a = if synced.is_finite() { synced } else { low };
+            *v = v0 + *a * dt;
+        }
+        next
+    }
+
+    /// The next tick of a stop at the limits: every joint brakes alone.
+    pub fn braking(&self, limits: &[DriveLimits], dt: f32) -> Self {
+        let n = self.n.min(N);
+        let mut next = *self;
+        for ((v, a), l) in next.velocity[..n]
+            .iter_mut()
+            .zip(&mut next.acceleration[..n])
+            .zip(limits)
+        {
+            *a = profile::toward(*v, *a, 0.0, l, dt);
+            *v += *a * dt;
+        }
+        next
+    }
+
+    /// The positions one tick on: `q_next = q + v dt`.
+    pub fn advance(&self, q: &[f32], dt: f32, q_next: &mut [f32]) {
+        for ((next, &qj), &v) in q_next.iter_mut().zip(q).zip(self.velocity()) {
+            *next = qj + v * dt;
+        }
+    }
+
+    /// Each joint's travel bound while it stops from this state
+    /// ([`profile::stopping_travel`]), into `travel`.
+    pub fn stopping_travel(&self, limits: &[DriveLimits], dt: f32, travel: &mut [f32]) {
+        for (((out, &v), &a), l) in travel
+            .iter_mut()
+            .zip(self.velocity())
+            .zip(self.acceleration())
+            .zip(limits)
+        {
+            *out = profile::stopping_travel(v, a, l, dt);
+        }
+    }
+}
+
+/// A velocity error below this fraction of the rate limit is settled.
+const SETTLED: f32 = 1.0e-6;
+
+fn clamp_rate(v: f32, l: &DriveLimits) -> f32 {
+    if v.is_finite() {
+        v.max(-l.max_rate).min(l.max_rate)
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,207 @@
+//! One joint at a fixed control period: the discrete, jerk-limited motion
+//! model every setpoint follows, the acceleration interval that keeps a
+//! joint able to stop within its limits, and a bound on how far it travels
+//! while stopping.
+//!
+//! ## The model
+//!
+//! Rows are `dt` seconds apart. Each tick the joint takes a new acceleration
+//! `a'`, then `v' = v + a' dt` and `q' = q + v' dt`. So the backward
+//! differences of the positions over `dt` (`v_k = (q_k - q_{k-1}) / dt`,
+//! `a_k = (v_k - v_{k-1}) / dt`, `j_k = (a_k - a_{k-1}) / dt`, rest before
+//! the first row) give back exactly `v` and `a`: the limits hold for the
+//! positions a drive receives, not only for an internal profile. Jerk and
+//! acceleration limits are the interval `a'` in `[a - u, a + u]` and
+//! `[-A, A]`, with `u = J dt` the largest change of acceleration in a tick.
+//!
+//! ## Settling
+//!
+//! [`settle_change`] `F(a')`: the velocity change from taking `a'` now and
+//! then ramping the acceleration back to zero as fast as the jerk allows
+//! (`a' - u`, `a' - 2u`, ... , 0). With `m = floor(|a'| / u)`,
+//! `F(a') = sign(a') dt ((m + 1) |a'| - u m (m + 1) / 2)`: odd, strictly
+//! increasing and linear between the multiples of `u`, so its inverse
+//! ([`acceleration_for`]) is one square root. `a' = F^-1(e)` is the
+//! time-optimal first move toward a velocity `e` away (it arrives with zero
+//! acceleration, without passing it), the discrete counterpart of
+//! Ruckig's velocity interface (Berscheid and Kroger, RSS 2021).
+//!
+//! ## Always able to stop within the limits
+//!
+//! [`viable`] is `a'` in `[a - u, a + u]`, `[-A, A]` and `F(a')` in
+//! `[-V - v, V - v]`: after any such choice the joint can still ramp its
+//! acceleration to zero without passing `+-V`. It is never empty when the
+//! state came from earlier choices in it (from rest, by induction:
+//! `F(a - u)` is what remained of `F(a)` after this tick). This is the
+//! discrete form of Ruckig's input rule `|a| <= sqrt(2 J (V - |v|))`.
+//!
+//! ## Stopping
+//!
+//! [`stopping_travel`] bounds how far the joint gets from where it is
+//! while it brakes to rest at its limits (each tick `a' = F^-1(-v)` in the
+//! viable interval): the rise while a forward acceleration ramps out, then
+//! the continuous jerk-limited stop from the peak velocity `w` (`w (w / A +
+//! A / J) / 2` with a phase at `-A`, `w sqrt(w / J)` without), plus one tick
+//! at `w` for the discrete lag. A joint already decelerating harder than its
+//! velocity needs cannot take that out in time and passes zero velocity:
+//! the way back is bounded the same way. Tests check the bound against the
+//! stop simulated tick by tick.
+
+use crate::tracker::limits::DriveLimits;
+
+/// The velocity change of taking `a` now and then ramping the acceleration
+/// back to zero at the jerk limit (`u = J dt` per tick), per second times
+/// seconds: `F(a)` of the module docs.
+#[inline]
+pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
+    let x = a.abs();
+    let m = libm::floorf(x / u);
+    let f = dt * ((m + 1.0) * x - 0.5 * u * m * (m + 1.0));
+    if a < 0.0 {
+        -f
+    } else {
+        f
+    }
+}
+
+/// The acceleration `a` with [`settle_change`]`(a) = e`: the time-optimal
+/// first move toward a velocity `e` away. Finite for finite `e`.
+#[inline]
+pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
+    let x = e.abs() / (dt * u);
+    // Largest m with m (m + 1) / 2 <= x.
+    let m = libm::floorf(0.5 * (libm::sqrtf(1.0 + 8.0 * x) - 1.0)).max(0.0);
+    let a = e.abs() / (dt * (m + 1.0)) + 0.5 * u * m;
+    if e < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
+/// The accelerations a joint at velocity `v` (per second) and acceleration
+/// `a` (per second squared) may take this tick and still stop within its
+/// limits: `(low, high)`. When rounding (or a state from outside the model)
+/// leaves it empty, the interval the jerk and acceleration limits allow,
+/// narrowed toward stopping.
+#[inline]
+pub fn viable(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
+    let u = limits.max_jerk * dt;
+    let jerk_low = (a - u).max(-limits.max_accel);
+    let jerk_high = (a + u).min(limits.max_accel);
+    let low = jerk_low.max(acceleration_for(-limits.max_rate - v, u, dt));
+    let high = jerk_high.min(acceleration_for(limits.max_rate - v, u, dt));
+    if low <= high {
+        (low, high)
+    } else {
+        // Brake as hard as the jerk allows, in the direction that slows.
+        let brake = if v > 0.0 { jerk_low } else { jerk_high };
+        (brake, brake)
+    }
+}
+
+/// The acceleration that moves a joint toward the velocity `target` (per
+/// second) fastest, within [`viable`].
+#[inline]
+pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32 {
+    let (low, high) = viable(v, a, limits, dt);
+    let wanted = acceleration_for(target - v, limits.max_jerk * dt, dt);
+    wanted.max(low).min(high)
+}
+
+/// A bound on how far (length units or radians) a joint at velocity `v`
+/// and acceleration `a` gets from where it is while it brakes to rest at its
+/// limits (the module docs): the larger of the forward bound and, when an
+/// acceleration against the motion is too large to take out before the
+/// velocity passes zero, the way back.
+#[inline]
+pub fn stopping_travel(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
+    let (w0, forward) = if v < 0.0 { (-v, -a) } else { (v, a) };
+    let u = limits.max_jerk * dt;
+    // While a forward acceleration ramps out: `F(a - u)` more speed, at
+    // most `ceil(a / u)` ticks.
+    let (rise, rise_ticks) = if forward > 0.0 {
+        let rest = (forward - u).max(0.0);
+        (settle_change(rest, u, dt), libm::ceilf(forward / u) - 1.0)
+    } else {
+        (0.0, 0.0)
+    };
+    let ahead = if forward >= 0.0 {
+        let w = w0 + rise;
+        w * dt * (rise_ticks + 1.0) + stop_from(w, limits)
+    } else {
+        decelerating(w0, forward, limits, dt)
+    };
+    // An acceleration against the motion larger than the velocity can
+    // absorb: ramped out from the next tick (`a + u`, `a + 2u`, ...), the
+    // velocity passes zero by at most `-(v + F(a + u))`, within
+    // `ceil(|a| / u) + 1` ticks.
+    let back_speed = if forward < 0.0 {
+        (-(w0 + settle_change((forward + u).min(0.0), u, dt))).max(0.0)
+    } else {
+        0.0
+    };
+    let back = if back_speed > 0.0 {
+        back_speed * dt * (libm::ceilf(-forward / u) + 2.0) + stop_from(back_speed, limits)
+    } else {
+        0.0
+    };
+    // f32 rounding of speeds near zero.
+    ahead.max(back) + ROUNDING * limits.max_rate * dt
+}
+
+/// Travel [`stopping_travel`] adds for the rounding of speeds near zero,
+/// as a fraction of a tick at the rate limit.
+pub const ROUNDING: f32 = 1.0e-5;
+
+/// The forward part of a stop from speed `w0 > 0` with an acceleration
+/// `-d < 0` against it. Every braking tick's acceleration is at most the
+/// ramp-out's (`-d + u`, `-d + 2u`, ..., 0; by induction), so the speeds are
+/// at most the ramp-out's: the first tick exactly, then (the ramp-out's
+/// speeds are convex in the tick) under the chord to its end speed
+/// `w0 + F(-d + u)` after `K = ceil(d / u)` ticks, then the stop from there.
+#[inline]
+fn decelerating(w0: f32, forward: f32, limits: &DriveLimits, dt: f32) -> f32 {
+    let u = limits.max_jerk * dt;
+    let first = (forward + u).min(0.0);
+    let v1 = w0 + first * dt;
+    if v1 <= 0.0 {
+        return 0.0;
+    }
+    let ticks = libm::ceilf(-forward / u).max(1.0);
+    let end = w0 + settle_change(first, u, dt);
+    let chord = if end >= 0.0 {
+        v1 * dt + (ticks - 1.0) * dt * 0.5 * (v1 + end) + end * dt + stop_from(end, limits)
+    } else {
+        // The chord from (1, v1) to (ticks, end) crosses zero at 1 + c.
+        let c = (ticks - 1.0) * v1 / (v1 - end);
+        v1 * dt + 0.5 * dt * v1 * c
+    };
+    // The stop already under way: the tail, after `d / J` seconds, of the
+    // continuous stop from rest acceleration at `w0 + d^2 / 2J`, when that
+    // stop's deceleration passes `d`; plus half a tick of discrete lag.
+    let (d, jerk) = (-forward, limits.max_jerk);
+    let virtual_speed = w0 + 0.5 * d * d / jerk;
+    let peak = limits.max_accel.min(libm::sqrtf(jerk * virtual_speed));
+    if d <= peak {
+        let t1 = d / jerk;
+        let under_way = stop_from(virtual_speed, limits)
+            - (virtual_speed * t1 - jerk * t1 * t1 * t1 / 6.0)
+            + 0.5 * w0 * dt;
+        chord.min(under_way)
+    } else {
+        chord
+    }
+}
+
+/// The continuous jerk-limited stop from speed `w` at zero acceleration:
+/// `w (w / A + A / J) / 2` with a phase at `-A`, `w sqrt(w / J)` without.
+#[inline]
+fn stop_from(w: f32, limits: &DriveLimits) -> f32 {
+    let (jerk, accel) = (limits.max_jerk, limits.max_accel);
+    if w * jerk >= accel * accel {
+        0.5 * w * (w / accel + accel / jerk)
+    } else {
+        w * libm::sqrtf(w / jerk)
+    }
+}

@@ -1,0 +1,264 @@
+//! The tracker against independent computations: the settling change
+//! summed tick by tick, the limits read back from the positions' own
+//! differences (in `f64`), the stop simulated to rest.
+
+use super::limits::DriveLimits;
+use super::profile::{acceleration_for, settle_change, stopping_travel, viable};
+use super::DriveState;
+use crate::escape::rng::Rng;
+use std::vec;
+use std::vec::Vec;
+
+/// Uniform in `[lo, hi)`.
+fn range(rng: &mut Rng, lo: f32, hi: f32) -> f32 {
+    lo + (hi - lo) * 0.5 * (rng.uniform() + 1.0)
+}
+
+fn random_limits(rng: &mut Rng) -> DriveLimits {
+    let max_rate = range(rng, 0.05, 3.0);
+    let max_accel = max_rate / range(rng, 0.05, 1.5);
+    DriveLimits {
+        max_rate,
+        max_accel,
+        max_jerk: max_accel / range(rng, 0.02, 0.5),
+    }
+}
+
+/// `F(a)` the long way: take `a`, then step the acceleration toward zero by
+/// `u` a tick, summing the velocity changes, in `f64`.
+fn settle_by_ticks(a: f64, u: f64, dt: f64) -> f64 {
+    let mut acc = a;
+    let mut change = 0.0;
+    loop {
+        change += acc * dt;
+        if acc == 0.0 {
+            return change;
+        }
+        acc = if acc.abs() <= u {
+            0.0
+        } else {
+            acc - u * acc.signum()
+        };
+    }
+}
+
+#[test]
+fn settle_change_is_the_sum_over_ticks_and_its_inverse_inverts_it() {
+    let mut rng = Rng::seeded(7, &[]);
+    for _ in 0..2000 {
+        let dt = range(&mut rng, 0.001, 0.2);
+        let u = range(&mut rng, 0.01, 20.0) * dt;
+        let a = rng.uniform() * range(&mut rng, 0.0, 40.0) * u;
+        let by_ticks = settle_by_ticks(a as f64, u as f64, dt as f64);
+        let closed = settle_change(a, u, dt) as f64;
+        assert!(
+            (closed - by_ticks).abs() <= 1e-4 * by_ticks.abs() + 1e-9,
+            "a {a} u {u} dt {dt}: {closed} vs {by_ticks}"
+        );
+        let back = acceleration_for(settle_change(a, u, dt), u, dt);
+        assert!((back - a).abs() <= 1e-4 * (a.abs() + u), "{a} -> {back}");
+        // Increasing.
+        let b = a + 0.01 * u;
+        assert!(settle_change(b, u, dt) > settle_change(a, u, dt));
+    }
+}
+
+/// Positions in `f64` from a run of ticks, and their backward differences
+/// with rest before the first row: the largest `|v|/V`, `|a|/A`, `|j|/J`.
+fn worst_ratios(rows: &[f64], l: &DriveLimits, dt: f64) -> (f64, f64, f64) {
+    let at = |k: isize| rows[k.max(0) as usize];
+    let (mut rv, mut ra, mut rj) = (0.0f64, 0.0f64, 0.0f64);
+    for k in 0..rows.len() as isize {
+        let v = |k: isize| (at(k) - at(k - 1)) / dt;
+        let a = |k: isize| (v(k) - v(k - 1)) / dt;
+        let j = (a(k) - a(k - 1)) / dt;
+        rv = rv.max(v(k).abs() / l.max_rate as f64);
+        ra = ra.max(a(k).abs() / l.max_accel as f64);
+        rj = rj.max(j.abs() / l.max_jerk as f64);
+    }
+    (rv, ra, rj)
+}
+
+#[test]
+fn any_target_sequence_keeps_rate_acceleration_and_jerk_within_limits() {
+    let mut rng = Rng::seeded(11, &[]);
+    const N: usize = 6;
+    for _ in 0..200 {
+        let limits: Vec<DriveLimits> = (0..N).map(|_| random_limits(&mut rng)).collect();
+        let dt = range(&mut rng, 0.005, 0.1);
+        let mut state = DriveState::<N>::at_rest(N);
+        let mut rows: Vec<[f64; N]> = vec![[0.0; N]];
+        let mut target = [0.0f32; N];
+        for tick in 0..400 {
+            // Targets jump at random times, beyond the limits too, or brake.
+            if tick % 7 == 0 || rng.uniform() > 0.8 {
+                for (t, l) in target.iter_mut().zip(&limits) {
+                    *t = rng.uniform() * 1.5 * l.max_rate;
+                }
+            }
+            state = if rng.uniform() > 0.9 {
+                state.braking(&limits, dt)
+            } else {
+                state.toward(&limits, dt, &target)
+            };
+            let mut row = *rows.last().unwrap();
+            for (q, &v) in row.iter_mut().zip(state.velocity()) {
+                *q += v as f64 * dt as f64;
+            }
+            rows.push(row);
+        }
+        for (j, l) in limits.iter().enumerate() {
+            let column: Vec<f64> = rows.iter().map(|r| r[j]).collect();
+            let (rv, ra, rj) = worst_ratios(&column, l, dt as f64);
+            assert!(rv <= 1.0 + 1e-4, "rate {rv}");
+            assert!(ra <= 1.0 + 1e-4, "acceleration {ra}");
+            assert!(rj <= 1.0 + 1e-3, "jerk {rj}");
+        }
+    }
+}
+
+#[test]
+fn from_rest_the_joints_move_along_the_target_direction_and_arrive_together() {
+    let mut rng = Rng::seeded(3, &[]);
+    const N: usize = 5;
+    for _ in 0..100 {
+        let limits: Vec<DriveLimits> = (0..N).map(|_| random_limits(&mut rng)).collect();
+        let dt = 0.05;
+        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
+        let settled = |s: &[f32], a: &[f32], t: &[f32]| {
+            s.iter()
+                .zip(a)
+                .zip(t)
+                .zip(&limits)
+                .all(|(((&v, &a), &t), l)| {
+                    (v - t).abs() <= 1e-4 * l.max_rate && a.abs() <= 1e-3 * l.max_accel
+                })
+        };
+        // Each joint alone, as fast as its own limits allow.
+        let mut slowest_alone = 0;
+        for (l, &t) in limits.iter().zip(&target) {
+            let mut alone = DriveState::<1>::at_rest(1);
+            let mut ticks = 0;
+            while (alone.velocity()[0] - t).abs() > 1e-4 * l.max_rate
+                || alone.acceleration()[0].abs() > 1e-3 * l.max_accel
+            {
+                alone = alone.toward(&[*l], dt, &[t]);
+                ticks += 1;
+            }
+            slowest_alone = slowest_alone.max(ticks);
+        }
+        let mut state = DriveState::<N>::at_rest(N);
+        let mut ticks = 0;
+        while !settled(state.velocity(), state.acceleration(), &target) {
+            state = state.toward(&limits, dt, &target);
+            ticks += 1;
+            assert!(ticks < 1000);
+            // Parallel to the target: v = s * target for one s.
+            let s = state.velocity()[0] / target[0];
+            for (j, (&v, &t)) in state.velocity().iter().zip(&target).enumerate() {
+                assert!(
+                    (v - s * t).abs() <= 1e-4 * limits[j].max_rate,
+                    "tick {ticks}, joint {j}: {v} vs {s} x {t}"
+                );
+            }
+        }
+        // Together, and not much later than the slowest joint alone (phase
+        // synchronisation is not always time-optimal: which joint limits the
+        // fraction changes as the accelerations ramp).
+        assert!(
+            ticks as f32 <= 1.15 * slowest_alone as f32 + 1.0,
+            "{ticks} ticks, slowest alone {slowest_alone}"
+        );
+    }
+}
+
+#[test]
+fn from_rest_to_full_rate_takes_the_time_optimal_number_of_ticks() {
+    // V 1, A 2 (0.5 s), J 20 (0.1 s), dt 0.05: ramp 2 ticks, hold, ramp 2.
+    let l = DriveLimits::from_rate(1.0);
+    let dt = 0.05;
+    let mut state = DriveState::<1>::at_rest(1);
+    let mut ticks = 0;
+    while (state.velocity()[0] - 1.0).abs() > 1e-5 || state.acceleration()[0].abs() > 1e-4 {
+        state = state.toward(&[l], dt, &[1.0]);
+        ticks += 1;
+        assert!(ticks < 100);
+    }
+    // Accelerations 1, 2 (x 9), 1, 0: the velocity 0.05, 0.1 x 9, 0.05 adds
+    // up to 1 in 11 ticks and the acceleration is out in the 12th, the
+    // continuous V / A + A / J = 0.6 s.
+    assert_eq!(ticks, 12);
+}
+
+#[test]
+fn a_stop_reaches_rest_within_its_travel_bound() {
+    let mut rng = Rng::seeded(5, &[]);
+    let mut loosest = 0.0f64;
+    for _ in 0..20_000 {
+        let l = random_limits(&mut rng);
+        let dt = range(&mut rng, 0.005, 0.1);
+        // A state reached by the model: toward random targets.
+        let mut state = DriveState::<1>::at_rest(1);
+        for _ in 0..(1 + (range(&mut rng, 0.0, 40.0) as usize)) {
+            let t = rng.uniform() * l.max_rate;
+            state = state.toward(&[l], dt, &[t]);
+        }
+        let (v0, a0) = (state.velocity()[0], state.acceleration()[0]);
+        let bound = stopping_travel(v0, a0, &l, dt) as f64;
+        let (mut q, mut reach) = (0.0f64, 0.0f64);
+        let mut ticks = 0;
+        while state.velocity()[0].abs() > 1e-6 * l.max_rate
+            || state.acceleration()[0].abs() > 1e-5 * l.max_accel
+        {
+            state = state.braking(&[l], dt);
+            q += state.velocity()[0] as f64 * dt as f64;
+            reach = reach.max(q.abs());
+            ticks += 1;
+            assert!(ticks < 10_000, "no rest from v {v0}, a {a0}");
+        }
+        assert!(
+            reach <= bound * (1.0 + 1e-4) + 1e-9,
+            "v {v0} a {a0} {l:?} dt {dt}: went {reach}, bound {bound}"
+        );
+        // How loose: the bound's excess over the stop, in ticks at the
+        // rate limit (its discrete lag and the continuous stop it is built
+        // on cost about a tick).
+        let excess = (bound - reach) / (l.max_rate as f64 * dt as f64);
+        loosest = loosest.max(excess);
+    }
+    assert!(
+        loosest < 3.0,
+        "bound up to {loosest} ticks at the rate limit beyond the stop"
+    );
+}
+
+#[test]
+fn the_viable_interval_is_never_empty_along_the_model() {
+    let mut rng = Rng::seeded(9, &[]);
+    for _ in 0..500 {
+        let l = random_limits(&mut rng);
+        let dt = range(&mut rng, 0.005, 0.1);
+        let mut state = DriveState::<1>::at_rest(1);
+        for _ in 0..200 {
+            let (v, a) = (state.velocity()[0], state.acceleration()[0]);
+            let (low, high) = viable(v, a, &l, dt);
+            assert!(
+                low <= high + 1e-5 * l.max_accel,
+                "v {v} a {a}: {low} > {high}"
+            );
+            let t = rng.uniform() * 2.0 * l.max_rate;
+            state = state.toward(&[l], dt, &[t]);
+        }
+    }
+}
+
+#[test]
+fn targets_that_are_not_finite_are_read_as_rest() {
+    let l = DriveLimits::from_rate(1.0);
+    let mut state = DriveState::<2>::at_rest(2);
+    for _ in 0..50 {
+        state = state.toward(&[l, l], 0.05, &[f32::NAN, f32::INFINITY]);
+        assert!(state.velocity().iter().all(|v| v.is_finite()));
+    }
+    assert!(state.is_at_rest(&[l, l], 1e-6));
+}
