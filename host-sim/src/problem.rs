@@ -197,7 +197,12 @@ impl Problem {
                     .get(waypoint as usize)
                     .copied()
                     .flatten(),
-                ScenarioError::Mission(_) | ScenarioError::Capsules(_) => None,
+                ScenarioError::Drive { joint, .. } => {
+                    self.lines.joints.get(joint as usize).copied().flatten()
+                }
+                ScenarioError::Mission(_)
+                | ScenarioError::Capsules(_)
+                | ScenarioError::DriveLength => None,
             };
             let mut message = e.to_string();
             if let ScenarioError::Obstacle(o) = e {

@@ -98,6 +98,7 @@ impl<const N: usize> PhaseBench<N> {
             &mut self.mu[..n],
             &mut self.distance_sq[..n],
             self.field.nearest.map(|h| h.link),
+            0.0,
         )
         .potential
     }

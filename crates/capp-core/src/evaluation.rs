@@ -174,6 +174,7 @@ impl<const N: usize> Evaluation<N> {
                 &mut self.mu[..n],
                 &mut self.distance_sq[..n],
                 self.field.nearest.map(|h| h.link),
+                far_pairs(scenario.settings()),
             );
             // The link of the nearest obstacle pair slides along its
             // half-space; its other room must hold its link pairs too.
@@ -262,5 +263,18 @@ impl<const N: usize> Evaluations<N> {
     #[inline(always)]
     pub fn accept(&mut self) {
         self.now ^= 1;
+    }
+}
+
+/// How far beyond the self-collision broad phase link pairs are still
+/// measured for their rooms (`far` of [`link_pairs`]): with
+/// [`crate::Motion::Tracked`] the influence distance (a tick's room must
+/// hold the stop after it, and a far pair's room of a capsule radius would
+/// hold the arm to a crawl); none with [`crate::Motion::Stepped`] (its
+/// rooms, and plans, as before).
+fn far_pairs(settings: &crate::Settings) -> f32 {
+    match settings.motion {
+        crate::Motion::Tracked => settings.avoidance.influence_distance,
+        crate::Motion::Stepped => 0.0,
     }
 }

@@ -78,7 +78,7 @@ pub mod step_size;
 pub mod target;
 pub mod tracker;
 
-pub use mission::{Mission, MissionError, Settings, Waypoint};
+pub use mission::{Mission, MissionError, Motion, Settings, Waypoint};
 pub use obstacle::{ObstacleError, SuperEllipsoid};
 pub use planner::{Outcome, Phase, Planner, StartError, StepError, StepReport};
 pub use robot::{Joint, JointKind, Robot, RobotError};

@@ -75,6 +75,24 @@ pub struct Settings {
     pub max_halvings: u8,
     /// What happens at a dead end (see [`crate::escape`]).
     pub escape: EscapeSettings,
+    /// How the joints move from step to step ([`Motion`]).
+    pub motion: Motion,
+}
+
+/// How the planner turns the law's rate into motion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Motion {
+    /// The paper's: an Euler step of the law's rate, of variable length (at
+    /// most `time_step_s`), halved until it is clear; the rate may jump from
+    /// step to step.
+    Stepped,
+    /// A fixed control period (`time_step_s`, at most
+    /// [`crate::tracker::limits::MAX_CONTROL_PERIOD_S`]): the law's rate is
+    /// the velocity the tracker moves toward within each joint's rate,
+    /// acceleration and jerk limits, and every tick keeps the stop from its
+    /// end clear ([`crate::tracker`]).
+    Tracked,
 }
 
 impl Default for Settings {
@@ -92,6 +110,7 @@ impl Default for Settings {
             stall_progress: 0.01,
             max_halvings: 8,
             escape: EscapeSettings::default(),
+            motion: Motion::Stepped,
         }
     }
 }
@@ -251,6 +270,11 @@ impl Settings {
                     F::StallProgress,
                 ),
                 (self.max_halvings <= 16, F::MaxHalvings),
+                (
+                    self.motion == Motion::Stepped
+                        || self.time_step_s <= crate::tracker::limits::MAX_CONTROL_PERIOD_S,
+                    F::TimeStep,
+                ),
             ])
         };
         self.step_rule()

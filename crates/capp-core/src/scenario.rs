@@ -8,6 +8,7 @@ use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
 use crate::robot::{Joint, Robot, RobotError};
 use crate::self_collision::{CapsuleError, LinkCapsules};
 use crate::target::Target;
+use crate::tracker::limits::{DriveLimitError, DriveLimits};
 
 /// Most waypoints of a scenario that are joint configurations.
 pub const MAX_JOINT_GOALS: usize = 4;
@@ -27,6 +28,16 @@ pub enum ScenarioError {
     Mission(MissionError),
     /// The link capsules or the checked pairs.
     Capsules(CapsuleError),
+    /// A joint's drive limits ([`Scenario::set_drive_limits`]; `joint` is
+    /// 0-based, [`DriveLimitError`] says which limit).
+    Drive {
+        /// The joint, 0-based.
+        joint: u8,
+        /// Which limit.
+        limit: DriveLimitError,
+    },
+    /// [`Scenario::set_drive_limits`] with a slice of the wrong length.
+    DriveLength,
 }
 
 impl From<RobotError> for ScenarioError {
@@ -57,6 +68,20 @@ impl core::fmt::Display for ScenarioError {
             ScenarioError::Obstacle(e) => write!(f, "{e}"),
             ScenarioError::Mission(e) => write!(f, "{e}"),
             ScenarioError::Capsules(e) => write!(f, "robot: {e}"),
+            ScenarioError::Drive { joint, limit } => {
+                let which = match limit {
+                    DriveLimitError::Rate => "max_rate",
+                    DriveLimitError::Accel => "max_accel",
+                    DriveLimitError::Jerk => "max_jerk",
+                    DriveLimitError::Period => "control period",
+                };
+                write!(
+                    f,
+                    "robot: joint {}: {which} must be finite and above 0",
+                    joint + 1
+                )
+            }
+            ScenarioError::DriveLength => write!(f, "robot: one drive limit per joint"),
         }
     }
 }
@@ -72,6 +97,9 @@ pub struct Scenario<const N: usize, const M: usize, const W: usize> {
     settings: Settings,
     /// The links' capsules and the pairs checked ([`Scenario::set_link_capsules`]).
     capsules: LinkCapsules<N>,
+    /// Each joint's rate, acceleration and jerk limits
+    /// ([`Scenario::set_drive_limits`]; by default from the rates).
+    drive: [DriveLimits; N],
 }
 
 impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
@@ -98,6 +126,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             joint_goals: heapless::Vec::new(),
             settings: Settings::default(),
             capsules: LinkCapsules::none(),
+            drive: [DriveLimits::from_rate(1.0); N],
         }
     }
 
@@ -146,14 +175,18 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     ) -> Result<(), ScenarioError> {
         // Every field is named: a field added to `Scenario` fails to compile here.
         let Scenario {
-            robot: _,
+            robot,
             obstacles: validated,
             targets,
             joint_goals,
             settings: kept_settings,
             capsules,
+            drive,
         } = self;
         *capsules = LinkCapsules::none();
+        for (limits, joint) in drive.iter_mut().zip(robot.joints()) {
+            *limits = DriveLimits::from_rate(joint.max_rate);
+        }
         validated.clear();
         targets.clear();
         joint_goals.clear();
@@ -293,6 +326,45 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// [`Scenario::set_link_capsules`] gave them).
     pub fn capsules(&self) -> &LinkCapsules<N> {
         &self.capsules
+    }
+
+    /// Gives the joints' drives these acceleration (per second squared) and
+    /// jerk (per second cubed) limits, one per joint, in the joints' units;
+    /// the rate limit stays the joint's `max_rate`. Without it each joint
+    /// has [`DriveLimits::from_rate`]'s. On error the scenario keeps those.
+    pub fn set_drive_limits(
+        &mut self,
+        max_accel: &[f32],
+        max_jerk: &[f32],
+    ) -> Result<(), ScenarioError> {
+        let n = self.robot.len().min(N);
+        if max_accel.len() != n || max_jerk.len() != n {
+            return Err(ScenarioError::DriveLength);
+        }
+        let mut limits = [DriveLimits::from_rate(1.0); N];
+        for (j, ((out, joint), (&max_accel, &max_jerk))) in limits
+            .iter_mut()
+            .zip(self.robot.joints())
+            .zip(max_accel.iter().zip(max_jerk))
+            .enumerate()
+        {
+            *out = DriveLimits {
+                max_rate: joint.max_rate,
+                max_accel,
+                max_jerk,
+            };
+            out.validate().map_err(|limit| ScenarioError::Drive {
+                joint: j.min(u8::MAX as usize) as u8,
+                limit,
+            })?;
+        }
+        self.drive = limits;
+        Ok(())
+    }
+
+    /// Each joint's drive limits (`robot().len()` of them).
+    pub fn drive_limits(&self) -> &[DriveLimits] {
+        &self.drive[..self.robot.len().min(N)]
     }
 
     /// The targets the planner drives to, one per waypoint.

@@ -826,6 +826,10 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
             };
             (ErrorCode::InvalidCapsules, index)
         }
+        // The board keeps the drive limits that follow from the rates (the
+        // protocol does not carry others yet), so these cannot arise here.
+        ScenarioError::Drive { joint, .. } => (ErrorCode::InvalidRobot, joint),
+        ScenarioError::DriveLength => (ErrorCode::InvalidRobot, NO_INDEX),
     }
 }
 

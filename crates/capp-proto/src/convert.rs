@@ -132,6 +132,7 @@ impl From<capp_core::Settings> for Settings {
             escape_seed: s.escape.seed,
             escape_searches: s.escape.searches,
             saturation: s.law.saturation,
+            tracked: s.motion == capp_core::Motion::Tracked,
         }
     }
 }
@@ -175,6 +176,11 @@ impl From<Settings> for capp_core::Settings {
                 reach: s.escape_reach,
                 seed: s.escape_seed,
                 searches: s.escape_searches,
+            },
+            motion: if s.tracked {
+                capp_core::Motion::Tracked
+            } else {
+                capp_core::Motion::Stepped
             },
         }
     }

@@ -37,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 6;
+pub const VERSION: u8 = 7;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -180,6 +180,12 @@ pub struct Settings {
     /// Whether the damped law spends every usable joint's rate limit when a
     /// step is rate-limited (saturation in the null space; since version 5).
     pub saturation: bool,
+    /// Tracked motion: a fixed control period (`time_step_s`), each joint
+    /// within its rate, acceleration and jerk limits, every tick's stop
+    /// cleared (capp-core's `Motion::Tracked`; `false`: `Motion::Stepped`;
+    /// since version 7). The board's acceleration and jerk limits are the
+    /// defaults from the rates (capp-core's `DriveLimits::from_rate`).
+    pub tracked: bool,
 }
 
 /// The listing's setpoint rule (`joints.dat`): a setpoint whenever the

@@ -188,6 +188,7 @@ fn every_command_is_pinned() {
         escape_seed: 0x2545_F491,
         escape_searches: 4,
         saturation: true,
+        tracked: false,
     };
     check(
         &Command::Settings(settings),
@@ -219,6 +220,7 @@ fn every_command_is_pinned() {
             0x91, 0xE9, 0x97, 0xAA, 0x02, // 0x2545F491
             0x04, // escape_searches 4
             0x01, // saturation
+            0x00, // tracked
         ],
     );
     #[cfg(feature = "core")]

@@ -464,13 +464,15 @@ pub fn damped_rate<const N: usize>(
     if !(time_at_limits > 0.0 && time_at_limits.is_finite()) {
         return idle(rate);
     }
-    let k = 1.0 / max(time_at_limits, time_step_s);
+    let arrival_s = max(time_at_limits, time_step_s);
+    let k = 1.0 / arrival_s;
     rate.iter_mut().for_each(|r| *r *= k);
     Proposal {
         drive: Drive::Damped,
         constrained,
         time_step_s,
         may_rise: constrained,
+        arrival_s,
     }
 }
 

@@ -112,5 +112,6 @@ pub fn first_order_rate<const N: usize>(
         constrained,
         time_step_s: h,
         may_rise: constrained,
+        arrival_s: f32::INFINITY,
     }
 }

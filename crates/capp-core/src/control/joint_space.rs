@@ -106,12 +106,14 @@ pub fn joint_rate<const N: usize>(
             ..Proposal::IDLE
         };
     }
-    let k = 1.0 / max(time, time_step_s);
+    let arrival_s = max(time, time_step_s);
+    let k = 1.0 / arrival_s;
     rate.iter_mut().for_each(|r| *r *= k);
     Proposal {
         drive: Drive::Joints,
         constrained,
         time_step_s,
         may_rise: constrained || walk,
+        arrival_s,
     }
 }

@@ -196,6 +196,12 @@ pub struct Proposal {
     /// Whether the step may raise `V`: a constrained step trades descent for
     /// clearance, and an escape's walk is leaving a dead end.
     pub may_rise: bool,
+    /// Seconds the rate would take to cover the law's whole motion (the
+    /// damped law's step, the way to a joint configuration): each joint's
+    /// remaining way is `|rate| arrival_s`, which the tracker brakes to
+    /// arrive at rest within ([`crate::tracker`]). Infinite when the law
+    /// does not know (the first-order laws).
+    pub arrival_s: f32,
 }
 
 impl Proposal {
@@ -205,6 +211,7 @@ impl Proposal {
         constrained: false,
         time_step_s: 0.0,
         may_rise: false,
+        arrival_s: f32::INFINITY,
     };
 }
 

@@ -31,6 +31,7 @@ mod motion;
 mod progress;
 mod report;
 mod start;
+mod tick;
 mod waypoints;
 
 pub use report::{Outcome, Phase, StartError, StepError, StepReport};
@@ -42,9 +43,11 @@ use crate::escape::{worth_escaping, Escape, Leg, Stall};
 use crate::evaluation::{target_error, Evaluations};
 use crate::kinematics::Frames;
 use crate::math::all_finite;
+use crate::mission::Motion;
 use crate::projection::CONTACT_FLOOR;
 use crate::scenario::Scenario;
 use crate::target::{pose_error, Target};
+use crate::tracker::DriveState;
 use progress::Progress;
 
 /// The planner's mutable state: the joint vector and every buffer a step
@@ -69,6 +72,10 @@ pub struct Planner<const N: usize> {
     /// The lowest `V` of the current waypoint and when: stall detection.
     progress: Progress,
     last: StepReport,
+    /// Every joint's velocity and acceleration ([`Motion::Tracked`]).
+    drive: DriveState<N>,
+    /// The velocities the tracker moves toward this tick.
+    velocity_target: [f32; N],
 }
 
 impl<const N: usize> Planner<N> {
@@ -100,6 +107,8 @@ impl<const N: usize> Planner<N> {
             error_step: 0.0,
             progress: Progress::new(),
             last: StepReport::at_start(Phase::Done(Outcome::Stalled)),
+            drive: DriveState::at_rest(0),
+            velocity_target: [0.0; N],
         };
         planner.reset(&[]);
         planner
@@ -110,9 +119,17 @@ impl<const N: usize> Planner<N> {
         &self.q[..self.n.min(N)]
     }
 
-    /// The joint rate of the last step (per second), after projection and limits.
+    /// The joint rate of the last step (per second), after projection and
+    /// limits: with [`Motion::Tracked`], the joints' velocities.
     pub fn rates(&self) -> &[f32] {
         &self.rate[..self.n.min(N)]
+    }
+
+    /// The joints' velocities (per second) and accelerations (per second
+    /// squared) after the last tick ([`Motion::Tracked`]; at rest
+    /// throughout with [`Motion::Stepped`]).
+    pub fn drive(&self) -> &DriveState<N> {
+        &self.drive
     }
 
     /// Frames of the current configuration.
@@ -187,16 +204,23 @@ impl<const N: usize> Planner<N> {
             .now()
             .law_input(scenario, &self.q[..n], self.error_step);
         let proposal = propose(&input, goal, &mut self.law, &mut self.rate[..n]);
-        // 4. Bound: the joint limits, conservative advancement.
-        let h = motion::bound(
-            scenario,
-            self.evals.now(),
-            &self.q[..n],
-            &mut self.rate[..n],
-            proposal.time_step_s,
-        );
-        // 5. Accept or shorten.
-        let (accepted, h, halvings) = self.take(scenario, &drive_target, &proposal, h);
+        let (accepted, h, halvings) = if scenario.settings().motion == Motion::Tracked {
+            // 4-5. The tracker: a tick toward the rate whose stop is clear,
+            // or a tick of the stop already cleared.
+            let settle = self.settling(scenario, &target);
+            self.tick(scenario, &drive_target, &proposal, settle)
+        } else {
+            // 4. Bound: the joint limits, conservative advancement.
+            let h = motion::bound(
+                scenario,
+                self.evals.now(),
+                &self.q[..n],
+                &mut self.rate[..n],
+                proposal.time_step_s,
+            );
+            // 5. Accept or shorten.
+            self.take(scenario, &drive_target, &proposal, h)
+        };
         // 6. Account: progress, the escape, the outcome.
         self.account(scenario, &target, escaping, accepted);
         self.last = self.report_step(scenario, &target, h, proposal.constrained, halvings);
@@ -247,6 +271,13 @@ impl<const N: usize> Planner<N> {
         scenario: &Scenario<N, M, W>,
         target: &Target,
     ) -> StepReport {
+        let held = if scenario.settings().motion == Motion::Tracked {
+            // The arm holds by braking to rest, in real time.
+            self.brake(scenario, target);
+            scenario.settings().time_step_s
+        } else {
+            0.0
+        };
         let scratch = Scratch {
             next: self.evals.next_mut(),
             q: &mut self.q_next,
@@ -255,11 +286,12 @@ impl<const N: usize> Planner<N> {
         };
         self.escape.search_step(scenario, target, scratch);
         self.step += 1;
-        self.rate[..self.n.min(N)].fill(0.0);
+        let n = self.n.min(N);
+        self.rate[..n].copy_from_slice(&self.drive.velocity()[..n]);
         if self.step >= scenario.settings().max_steps {
             self.phase = Phase::Done(Outcome::Capped);
         }
-        self.last = self.report(0.0, false, 0);
+        self.last = self.report(held, false, 0);
         self.last
     }
 
@@ -415,6 +447,10 @@ impl<const N: usize> Planner<N> {
                 return;
             }
             let next = waypoint as usize + 1;
+            if next >= targets.len() && !self.at_rest(scenario) {
+                // Tracked: the target is reached at rest; the tick settles.
+                return;
+            }
             if next >= targets.len() {
                 self.phase = Phase::Done(Outcome::Reached);
                 return;

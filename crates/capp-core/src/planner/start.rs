@@ -6,6 +6,7 @@ use super::progress::Progress;
 use super::{Outcome, Phase, Planner, StartError, StepReport};
 use crate::avoidance::Clearance;
 use crate::scenario::Scenario;
+use crate::tracker::DriveState;
 
 impl<const N: usize> Planner<N> {
     /// [`Planner::new`] in place: the same checks and the same plan (to the
@@ -94,6 +95,8 @@ impl<const N: usize> Planner<N> {
             error_step,
             progress,
             last,
+            drive,
+            velocity_target,
         } = self;
         let len = start.len().min(N);
         *n = len;
@@ -113,5 +116,7 @@ impl<const N: usize> Planner<N> {
         *error_step = 0.0;
         *progress = Progress::new();
         *last = StepReport::at_start(*phase);
+        *drive = DriveState::at_rest(len);
+        velocity_target.fill(0.0);
     }
 }

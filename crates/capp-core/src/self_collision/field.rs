@@ -68,6 +68,12 @@ pub struct SelfField {
 /// gradient to `mu` (`frames.len()` values) and lowers each link's
 /// `room_sq` (length units squared) to its share of its pairs' gaps; the
 /// share of link `pressed` alone is [`SelfField::pressed_room_sq`].
+///
+/// `far` (length units, 0 for none): pairs beyond the broad phase's spheres
+/// but within `far` more of them are measured too, by the distance of their
+/// spheres (one square root each), and pairs farther still give each link
+/// `far / 2` more than its far room; so a link's room grows with its
+/// distance from the others instead of stopping at its far room.
 pub fn link_pairs<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -75,6 +81,7 @@ pub fn link_pairs<const N: usize>(
     mu: &mut [f32],
     room_sq: &mut [f32],
     pressed: Option<u8>,
+    far: f32,
 ) -> SelfField {
     let mut field = SelfField {
         clear: true,
@@ -91,16 +98,17 @@ pub fn link_pairs<const N: usize>(
         return field;
     }
     let mut mid = [Vec3::zeros(); N];
-    for (k, (m, (room, far))) in mid
+    for (k, (m, (room, &far_room))) in mid
         .iter_mut()
         .zip(room_sq.iter_mut().zip(&capsules.far_room))
         .take(n)
         .enumerate()
     {
         *m = (frames.pivot(k) + frames.link_end(k)) * 0.5;
-        *room = min(*room, far * far);
+        let far_room = far_room + 0.5 * far;
+        *room = min(*room, far_room * far_room);
         if k == pressed {
-            field.pressed_room_sq = far * far;
+            field.pressed_room_sq = far_room * far_room;
         }
     }
     // Per link: the sum of the pair forces on it, and of `t f`.
@@ -127,7 +135,27 @@ pub fn link_pairs<const N: usize>(
             };
             // Broad phase: spheres round both capsules inflated by INFLUENCE clearance units.
             let reach = reach_a + reach_b;
-            if (m_a - m_b).norm_squared() >= reach * reach || b >= n {
+            let centres_sq = (m_a - m_b).norm_squared();
+            if b >= n {
+                continue;
+            }
+            if centres_sq >= reach * reach {
+                let outer = reach + far;
+                if far > 0.0 && centres_sq < outer * outer {
+                    // The capsules lie within their spheres of `reach`
+                    // less the influence's share of the radii.
+                    let inflation = INFLUENCE * CLEARANCE_SCALE * (r_a + r_b);
+                    let gap = libm::sqrtf(centres_sq) - reach + inflation;
+                    let share = 0.5 * max(gap, 0.0);
+                    for k in [a, b] {
+                        if let Some(room) = room_sq.get_mut(k) {
+                            *room = min(*room, share * share);
+                        }
+                        if k == pressed {
+                            field.pressed_room_sq = min(field.pressed_room_sq, share * share);
+                        }
+                    }
+                }
                 continue;
             }
             let pair = closest_points(
@@ -246,7 +274,7 @@ mod tests {
         let potential = |q: &[f32], frames: &mut Frames<8>| {
             forward_kinematics(&robot, q, frames);
             let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
-            link_pairs(&robot, frames, &caps, &mut mu, &mut room, None)
+            link_pairs(&robot, frames, &caps, &mut mu, &mut room, None, 0.0)
         };
         let mut tested = 0;
         for _ in 0..400 {
@@ -256,7 +284,7 @@ mod tests {
             });
             forward_kinematics(&robot, &q, &mut frames);
             let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
-            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None);
+            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None, 0.0);
             if field.active_pairs == 0 || !field.clear || field.closest.unwrap().clearance < 0.3 {
                 continue;
             }
@@ -301,7 +329,7 @@ mod tests {
             });
             forward_kinematics(&robot, &q, &mut frames);
             let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
-            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None);
+            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None, 0.0);
             for a in 0..8 {
                 for b in a + 1..8 {
                     if !caps.is_checked(a, b) {

@@ -8,6 +8,8 @@
 //!   differences are the velocity and acceleration), the time-optimal move
 //!   toward a velocity, the interval of accelerations after which the joint
 //!   can still stop within its limits, and a bound on its stopping travel;
+//! * [`clearance`]: conservative advancement for a tick and the stop after
+//!   it;
 //! * [`DriveState`]: every joint's velocity and acceleration, the next tick
 //!   toward the law's rates (time-synchronised), the next tick of a stop,
 //!   and each joint's travel bound for the tick and the stop after it.
@@ -35,6 +37,7 @@
 //! the other joints do; conservative advancement over those per-joint
 //! travels covers every configuration of the stop.
 
+pub mod clearance;
 pub mod limits;
 pub mod profile;
 
@@ -138,6 +141,20 @@ impl<const N: usize> DriveState<N> {
             *v += *a * dt;
         }
         next
+    }
+
+    /// Joint `j` of this tick takes, instead, the next tick of its stop from
+    /// `from` (the state this tick started at).
+    pub fn brake_joint(&mut self, j: usize, from: &Self, limits: &DriveLimits, dt: f32) {
+        if let (Some(v), Some(a), Some(&v0), Some(&a0)) = (
+            self.velocity.get_mut(j),
+            self.acceleration.get_mut(j),
+            from.velocity.get(j),
+            from.acceleration.get(j),
+        ) {
+            *a = profile::toward(v0, a0, 0.0, limits, dt);
+            *v = v0 + *a * dt;
+        }
     }
 
     /// The positions one tick on: `q_next = q + v dt`.

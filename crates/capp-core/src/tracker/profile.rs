@@ -111,24 +111,35 @@ pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32
 
 /// A bound on how far (length units or radians) a joint at velocity `v`
 /// and acceleration `a` gets from where it is while it brakes to rest at its
-/// limits (the module docs): the larger of the forward bound and, when an
-/// acceleration against the motion is too large to take out before the
-/// velocity passes zero, the way back.
+/// limits (the module docs), either way: the larger of [`stopping_span`]'s
+/// two sides.
 #[inline]
 pub fn stopping_travel(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
-    let (w0, forward) = if v < 0.0 { (-v, -a) } else { (v, a) };
+    let (below, above) = stopping_span(v, a, limits, dt);
+    below.max(above)
+}
+
+/// Bounds on how far below and above where it is a joint at velocity `v`
+/// and acceleration `a` gets while it brakes to rest at its limits: the
+/// forward bound on the side it moves to, and on the other side the way
+/// back when an acceleration against the motion is too large to take out
+/// before the velocity passes zero. Both include [`ROUNDING`].
+#[inline]
+pub fn stopping_span(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
+    let down = v < 0.0 || (v == 0.0 && a < 0.0);
+    let (w0, forward) = if down { (-v, -a) } else { (v, a) };
     let u = limits.max_jerk * dt;
-    // While a forward acceleration ramps out: `F(a - u)` more speed, at
-    // most `ceil(a / u)` ticks.
-    let (rise, rise_ticks) = if forward > 0.0 {
-        let rest = (forward - u).max(0.0);
-        (settle_change(rest, u, dt), libm::ceilf(forward / u) - 1.0)
-    } else {
-        (0.0, 0.0)
-    };
     let ahead = if forward >= 0.0 {
+        // While a forward acceleration ramps out: `F(a - u)` more speed,
+        // at most `ceil(a / u) - 1` ticks more.
+        let (rise, rise_ticks) = if forward > 0.0 {
+            let rest = (forward - u).max(0.0);
+            (settle_change(rest, u, dt), libm::ceilf(forward / u) - 1.0)
+        } else {
+            (0.0, 0.0)
+        };
         let w = w0 + rise;
-        w * dt * (rise_ticks + 1.0) + stop_from(w, limits)
+        w * dt * (rise_ticks.max(0.0) + 1.0) + stop_from(w, limits)
     } else {
         decelerating(w0, forward, limits, dt)
     };
@@ -147,12 +158,33 @@ pub fn stopping_travel(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
         0.0
     };
     // f32 rounding of speeds near zero.
-    ahead.max(back) + ROUNDING * limits.max_rate * dt
+    let slack = ROUNDING * limits.max_rate * dt;
+    if down {
+        (ahead + slack, back + slack)
+    } else {
+        (back + slack, ahead + slack)
+    }
 }
 
-/// Travel [`stopping_travel`] adds for the rounding of speeds near zero,
+/// Travel [`stopping_span`] adds for the rounding of speeds near zero,
 /// as a fraction of a tick at the rate limit.
 pub const ROUNDING: f32 = 1.0e-5;
+
+/// The highest speed (per second) from which a joint at zero acceleration
+/// stops within `room` (radians or length units) taking one more tick at
+/// that speed first: `w dt + w (w / A + A / J) / 2 <= room` (the stop with
+/// a phase at `-A`, which bounds the one without: `(x + 1) / 2 >= sqrt x`).
+/// The tracker's target near a goal or a joint limit, so the joint brakes
+/// in time instead of at the last tick.
+#[inline]
+pub fn braking_speed(room: f32, limits: &DriveLimits, dt: f32) -> f32 {
+    if !(room > 0.0) {
+        return 0.0;
+    }
+    let accel = limits.max_accel;
+    let b = 0.5 * accel / limits.max_jerk + dt;
+    accel * (libm::sqrtf(b * b + 2.0 * room / accel) - b)
+}
 
 /// The forward part of a stop from speed `w0 > 0` with an acceleration
 /// `-d < 0` against it. Every braking tick's acceleration is at most the

@@ -3,7 +3,9 @@
 //! differences (in `f64`), the stop simulated to rest.
 
 use super::limits::DriveLimits;
-use super::profile::{acceleration_for, settle_change, stopping_travel, viable};
+use super::profile::{
+    acceleration_for, braking_speed, settle_change, stopping_span, stopping_travel, viable,
+};
 use super::DriveState;
 use crate::escape::rng::Rng;
 use std::vec;
@@ -205,7 +207,8 @@ fn a_stop_reaches_rest_within_its_travel_bound() {
         }
         let (v0, a0) = (state.velocity()[0], state.acceleration()[0]);
         let bound = stopping_travel(v0, a0, &l, dt) as f64;
-        let (mut q, mut reach) = (0.0f64, 0.0f64);
+        let (below, above) = stopping_span(v0, a0, &l, dt);
+        let (mut q, mut reach, mut lowest, mut highest) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         let mut ticks = 0;
         while state.velocity()[0].abs() > 1e-6 * l.max_rate
             || state.acceleration()[0].abs() > 1e-5 * l.max_accel
@@ -213,12 +216,22 @@ fn a_stop_reaches_rest_within_its_travel_bound() {
             state = state.braking(&[l], dt);
             q += state.velocity()[0] as f64 * dt as f64;
             reach = reach.max(q.abs());
+            lowest = lowest.min(q);
+            highest = highest.max(q);
             ticks += 1;
             assert!(ticks < 10_000, "no rest from v {v0}, a {a0}");
         }
         assert!(
             reach <= bound * (1.0 + 1e-4) + 1e-9,
             "v {v0} a {a0} {l:?} dt {dt}: went {reach}, bound {bound}"
+        );
+        assert!(
+            -lowest <= below as f64 * (1.0 + 1e-4) + 1e-9,
+            "v {v0} a {a0}: below {lowest} vs {below}"
+        );
+        assert!(
+            highest <= above as f64 * (1.0 + 1e-4) + 1e-9,
+            "v {v0} a {a0}: above {highest} vs {above}"
         );
         // How loose: the bound's excess over the stop, in ticks at the
         // rate limit (its discrete lag and the continuous stop it is built
@@ -261,4 +274,38 @@ fn targets_that_are_not_finite_are_read_as_rest() {
         assert!(state.velocity().iter().all(|v| v.is_finite()));
     }
     assert!(state.is_at_rest(&[l, l], 1e-6));
+}
+
+#[test]
+fn from_the_braking_speed_the_stop_fits_in_the_room() {
+    let mut rng = Rng::seeded(13, &[]);
+    for _ in 0..2000 {
+        let l = random_limits(&mut rng);
+        let dt = range(&mut rng, 0.005, 0.1);
+        let room = range(&mut rng, 0.0, 2.0) * l.max_rate;
+        let w = braking_speed(room, &l, dt).min(l.max_rate);
+        let mut state = DriveState::<1>::at_rest(1);
+        // Reach w first (positions do not matter), then measure.
+        for _ in 0..10_000 {
+            if (state.velocity()[0] - w).abs() <= 1e-6 * l.max_rate
+                && state.acceleration()[0].abs() <= 1e-5 * l.max_accel
+            {
+                break;
+            }
+            state = state.toward(&[l], dt, &[w]);
+        }
+        let mut q = 0.0f64;
+        state = state.toward(&[l], dt, &[w]);
+        q += state.velocity()[0] as f64 * dt as f64;
+        while state.velocity()[0].abs() > 1e-6 * l.max_rate
+            || state.acceleration()[0].abs() > 1e-5 * l.max_accel
+        {
+            state = state.braking(&[l], dt);
+            q += state.velocity()[0] as f64 * dt as f64;
+        }
+        assert!(
+            q <= room as f64 * (1.0 + 1e-4) + 1e-6 * l.max_rate as f64,
+            "room {room}, w {w}: {q}"
+        );
+    }
 }

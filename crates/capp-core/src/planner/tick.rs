@@ -1,0 +1,256 @@
+//! The tracked step ([`Motion::Tracked`]): a fixed control period, each
+//! joint within its rate, acceleration and jerk limits, and every tick's
+//! stop cleared before the tick is taken ([`crate::tracker`]).
+//!
+//! 1. **Velocity target**: the law's rate, scaled to cover in one period
+//!    the motion the law asked of its step (`rate h / dt`); slowed, all
+//!    joints alike, so each joint can still stop within the law's remaining
+//!    way (`|rate| arrival_s`, [`crate::control::Proposal::arrival_s`]):
+//!    the braking approach that arrives at rest; and each joint slowed
+//!    alone so it can stop before its limit. At the final target, within
+//!    tolerance, the target is rest.
+//! 2. **Candidates**: the tracker's next tick toward that target, then
+//!    toward a half and a quarter of it. A joint whose stop would leave its
+//!    range brakes instead. A candidate is taken when every joint's
+//!    excursion (this tick's motion and the stop after it) keeps every link
+//!    within its room ([`crate::tracker::clearance`]) and the configuration
+//!    it reaches is clear and not creeping onto a surface.
+//! 3. **Otherwise brake**: the next tick of the stop the last taken tick
+//!    cleared (at rest: stay). A tick that neither moved nor could move is
+//!    refused, and the planner treats it as a dead end, as a refused step.
+
+use super::Planner;
+use crate::control::{Drive, Proposal};
+use crate::math::{all_finite, min};
+use crate::mission::Motion;
+use crate::planner::waypoints;
+use crate::projection::CONTACT_FLOOR;
+use crate::scenario::Scenario;
+use crate::target::Target;
+use crate::tracker::clearance::stop_is_clear;
+use crate::tracker::profile::{braking_speed, stopping_span};
+use crate::tracker::DriveState;
+
+/// Fractions of the velocity target tried before braking.
+const TRIES: [f32; 3] = [1.0, 0.5, 0.25];
+
+/// A joint is at rest when its speed is below this fraction of its rate
+/// limit (and its acceleration below this fraction of its limit).
+pub const REST_FRACTION: f32 = 0.01;
+
+impl<const N: usize> Planner<N> {
+    /// Whether the arm is at rest ([`REST_FRACTION`]); always, with
+    /// [`Motion::Stepped`].
+    pub(super) fn at_rest<const M: usize, const W: usize>(
+        &self,
+        scenario: &Scenario<N, M, W>,
+    ) -> bool {
+        scenario.settings().motion != Motion::Tracked
+            || self
+                .drive
+                .is_at_rest(scenario.drive_limits(), REST_FRACTION)
+    }
+
+    /// Whether the tick should come to rest: the final target is within
+    /// tolerance.
+    pub(super) fn settling<const M: usize, const W: usize>(
+        &self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+    ) -> bool {
+        let n = self.n.min(N);
+        let last = match self.phase {
+            super::Phase::Moving { waypoint } => waypoint as usize + 1 >= scenario.targets().len(),
+            super::Phase::Done(_) => true,
+        };
+        last && waypoints::within(
+            scenario,
+            &self.q[..n],
+            self.evals.now(),
+            target,
+            self.escape.subgoal().is_some(),
+        )
+    }
+
+    /// One tracked tick toward the law's `proposal` (its rate in
+    /// `self.rate`), evaluated against `drive_target`; `settle`: toward
+    /// rest. Counts the step. Returns whether the arm moved or was taken
+    /// moving, the period (seconds) and the candidates refused.
+    pub(super) fn tick<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        drive_target: &Target,
+        proposal: &Proposal,
+        settle: bool,
+    ) -> (bool, f32, u8) {
+        let (settings, robot, limits) = (
+            scenario.settings(),
+            scenario.robot(),
+            scenario.drive_limits(),
+        );
+        let n = self.n.min(N).min(limits.len());
+        let dt = settings.time_step_s;
+        self.step += 1;
+        self.velocity_target(scenario, proposal, settle);
+        let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
+        let fraction = settings.avoidance.advance_fraction;
+        let mut excursion = [0.0f32; N];
+        let mut refused = 0u8;
+        for &share in &TRIES {
+            let mut target = self.velocity_target;
+            target[..n].iter_mut().for_each(|t| *t *= share);
+            let mut next = self.drive.toward(limits, dt, &target[..n]);
+            self.keep_in_range(scenario, &mut next);
+            let now = self.evals.now();
+            if stop_is_clear(
+                robot,
+                &now.frames,
+                &now.distance_sq[..n],
+                &next,
+                limits,
+                dt,
+                fraction,
+                &mut excursion[..n],
+            ) {
+                next.advance(&self.q[..n], dt, &mut self.q_next[..n]);
+                self.clamp_next(scenario);
+                self.evals
+                    .next_mut()
+                    .evaluate(scenario, &self.q_next[..n], drive_target);
+                let (now, candidate) = (self.evals.now(), self.evals.next());
+                if candidate.safe_after(now.closest(), floor) && all_finite(&self.q_next[..n]) {
+                    self.commit(next);
+                    return (true, dt, refused);
+                }
+            }
+            refused = refused.saturating_add(1);
+        }
+        // Brake: the stop the last tick cleared.
+        let moving = !self.drive.is_at_rest(limits, 0.0);
+        self.brake(scenario, drive_target);
+        (moving, dt, refused)
+    }
+
+    /// A tick of the stop at the limits (nothing, at rest), evaluated
+    /// against `target`.
+    pub(super) fn brake<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+    ) {
+        let limits = scenario.drive_limits();
+        let n = self.n.min(N).min(limits.len());
+        if self.drive.is_at_rest(limits, 0.0) {
+            self.rate[..n].fill(0.0);
+            return;
+        }
+        let dt = scenario.settings().time_step_s;
+        let next = self.drive.braking(limits, dt);
+        next.advance(&self.q[..n], dt, &mut self.q_next[..n]);
+        self.clamp_next(scenario);
+        self.evals
+            .next_mut()
+            .evaluate(scenario, &self.q_next[..n], target);
+        self.commit(next);
+    }
+
+    /// Takes the tick: its state, its configuration (evaluated in `next`).
+    fn commit(&mut self, next: DriveState<N>) {
+        let n = self.n.min(N);
+        let err = self.evals.now().error.position;
+        self.drive = next;
+        self.evals.accept();
+        self.q[..n].copy_from_slice(&self.q_next[..n]);
+        self.rate[..n].copy_from_slice(&self.drive.velocity()[..n]);
+        self.error_step = self.evals.now().error.position - err;
+    }
+
+    /// `q_next` within the joint limits (a guard for rounding: the stop of
+    /// every taken tick stays within them).
+    fn clamp_next<const M: usize, const W: usize>(&mut self, scenario: &Scenario<N, M, W>) {
+        let n = self.n.min(N);
+        for (q, joint) in self.q_next[..n].iter_mut().zip(scenario.robot().joints()) {
+            *q = joint.clamp(*q);
+        }
+    }
+
+    /// The velocities the tick moves toward (module docs, 1), into
+    /// `self.velocity_target`.
+    fn velocity_target<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        proposal: &Proposal,
+        settle: bool,
+    ) {
+        let (settings, robot, limits) = (
+            scenario.settings(),
+            scenario.robot(),
+            scenario.drive_limits(),
+        );
+        let n = self.n.min(N).min(limits.len());
+        let dt = settings.time_step_s;
+        let idle = settle || (proposal.drive == Drive::Idle && !proposal.constrained);
+        let pace = if idle || !(dt > 0.0) {
+            0.0
+        } else {
+            min(proposal.time_step_s / dt, 1.0)
+        };
+        let target = &mut self.velocity_target[..n];
+        for (t, &r) in target.iter_mut().zip(&self.rate[..n]) {
+            *t = r * pace;
+        }
+        // The braking approach: every joint alike, so the direction holds.
+        if proposal.arrival_s.is_finite() && pace > 0.0 {
+            let mut share = 1.0f32;
+            for ((&t, &r), l) in target.iter().zip(&self.rate[..n]).zip(limits) {
+                let speed = t.abs();
+                let cap = braking_speed(r.abs() * proposal.arrival_s, l, dt);
+                if cap < speed {
+                    share = min(share, cap / speed);
+                }
+            }
+            target.iter_mut().for_each(|t| *t *= share);
+        }
+        // Each joint stops before its limit.
+        for ((t, (&q, joint)), l) in target
+            .iter_mut()
+            .zip(self.q[..n].iter().zip(robot.joints()))
+            .zip(limits)
+        {
+            let room = if *t > 0.0 {
+                joint.max - q
+            } else {
+                q - joint.min
+            };
+            let cap = braking_speed(room, l, dt);
+            *t = t.clamp(-cap, cap);
+        }
+    }
+
+    /// A joint whose stop from `next` would leave its range brakes instead
+    /// (its stop from the current state was kept within it).
+    fn keep_in_range<const M: usize, const W: usize>(
+        &self,
+        scenario: &Scenario<N, M, W>,
+        next: &mut DriveState<N>,
+    ) {
+        let limits = scenario.drive_limits();
+        let n = self.n.min(N).min(limits.len());
+        let dt = scenario.settings().time_step_s;
+        for (j, (joint, l)) in scenario
+            .robot()
+            .joints()
+            .iter()
+            .zip(limits)
+            .enumerate()
+            .take(n)
+        {
+            let (v, a) = (next.velocity()[j], next.acceleration()[j]);
+            let end = self.q[j] + v * dt;
+            let (below, above) = stopping_span(v, a, l, dt);
+            if end - below < joint.min || end + above > joint.max {
+                next.brake_joint(j, &self.drive, l, dt);
+            }
+        }
+    }
+}

@@ -1,0 +1,140 @@
+//! Conservative advancement for a tick and the stop after it.
+//!
+//! A tracked tick is taken only if every configuration the arm passes
+//! through, during the tick and during the stop at the limits from the
+//! tick's end, keeps every link point within `fraction` of its link's room
+//! ([`crate::evaluation::Evaluation::distance_sq`]: the distance to every
+//! inflated obstacle, and the link's share of the gap to every checked link)
+//! of where it is now. The stop is simulated tick by tick (each joint
+//! braking alone, [`super::DriveState::braking`]); between ticks the joints
+//! move on straight segments.
+//!
+//! For a joint displacement `x` from the current configuration `q`, a point
+//! `p` of link `k` moves by at most
+//!
+//! ```text
+//! |p(q + x) - p(q)| <= |J_p(q) x| + Q_k(|x|)
+//! ```
+//!
+//! whatever path led there: the Taylor remainder of `p` about `q` depends
+//! only on `x`, and [`crate::step_size`]'s second-order bound `Q_k` (grown
+//! with each `|x_m|`) bounds it along the straight segment from `q`. `J_p x`
+//! is linear in `p` along a link, so a link's worst point is one of its
+//! ends, and linear in `x`, so along each straight segment of the stop it is
+//! largest at one of the segment's ends: the ticks. So the test takes, per
+//! link, the largest first-order travel over the ticks of the stop and
+//! `Q_k` of each joint's largest excursion.
+
+use super::limits::DriveLimits;
+use super::DriveState;
+use crate::kinematics::Frames;
+use crate::math::{max, Vec3};
+use crate::robot::{JointKind, Robot};
+
+/// Most ticks of a stop the test simulates; a stop that has not reached
+/// rest by then is not cleared.
+pub const MAX_STOP_TICKS: usize = 128;
+
+/// Whether the tick to `after` (the drive state at the tick's end) and the
+/// stop from there keep every link within `fraction` of its room
+/// (`distance_sq`, its square, one per link), from the configuration of
+/// `frames`. `excursion` is scratch (one value per joint).
+#[allow(clippy::too_many_arguments)]
+pub fn stop_is_clear<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    distance_sq: &[f32],
+    after: &DriveState<N>,
+    limits: &[DriveLimits],
+    dt: f32,
+    fraction: f32,
+    excursion: &mut [f32],
+) -> bool {
+    let n = robot
+        .len()
+        .min(N)
+        .min(distance_sq.len())
+        .min(excursion.len());
+    let mut first = [0.0f32; N];
+    let mut x = [0.0f32; N];
+    let mut largest = [0.0f32; N];
+    let mut state = *after;
+    let mut ticks = 0;
+    loop {
+        for ((xj, big), &v) in x[..n]
+            .iter_mut()
+            .zip(&mut largest[..n])
+            .zip(state.velocity())
+        {
+            *xj += v * dt;
+            *big = max(*big, xj.abs());
+        }
+        first_order(robot, frames, &x[..n], &mut first[..n]);
+        if state.is_at_rest(limits, 0.0) {
+            break;
+        }
+        ticks += 1;
+        if ticks > MAX_STOP_TICKS {
+            return false;
+        }
+        state = state.braking(limits, dt);
+    }
+    excursion[..n].copy_from_slice(&largest[..n]);
+    // Second order: Q_k of the largest excursions (step_size's sums).
+    let fraction_sq = fraction * fraction;
+    let mut phi = 0.0f32;
+    let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
+    let mut pivot_chain = 0.0f32;
+    for ((joint, link), ((&size, &f), &d_sq)) in robot
+        .joints()
+        .iter()
+        .zip(robot.links())
+        .zip(largest[..n].iter().zip(&first[..n]).zip(distance_sq))
+    {
+        match joint.kind {
+            JointKind::Revolute => {
+                let a = size * (2.0 * phi + size);
+                lever_sum += a;
+                lever_base += a * pivot_chain;
+                phi += size;
+            }
+            JointKind::Prismatic => sliding += size * phi,
+        }
+        pivot_chain = link.chain;
+        let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
+        let travel = f + second;
+        // Not `<=` on a NaN: a bad value is never clear.
+        if !(travel * travel <= fraction_sq * d_sq) {
+            return false;
+        }
+    }
+    true
+}
+
+/// Per link, `first[k] = max(first[k], |J x|)` at the link's two ends: the
+/// velocity field of the displacement `x` (`v(p) = w x p + b`), one pass.
+fn first_order<const N: usize>(robot: &Robot<N>, frames: &Frames<N>, x: &[f32], first: &mut [f32]) {
+    let mut w = Vec3::zeros();
+    let mut b = Vec3::zeros();
+    let mut start_sq = 0.0f32;
+    for (j, ((joint, &step), out)) in robot
+        .joints()
+        .iter()
+        .zip(x)
+        .zip(first.iter_mut())
+        .enumerate()
+    {
+        let z = frames.axis(j);
+        match joint.kind {
+            JointKind::Revolute => {
+                w += z * step;
+                b -= z.cross(&frames.pivot(j)) * step;
+            }
+            JointKind::Prismatic => b += z * step,
+        }
+        let end_sq = (w.cross(&frames.link_end(j)) + b).norm_squared();
+        let worst = libm::sqrtf(max(start_sq, end_sq));
+        *out = max(*out, worst);
+        start_sq = end_sq;
+    }
+}
