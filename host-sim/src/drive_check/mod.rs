@@ -33,7 +33,8 @@
 //! positions it uses: the positions are stored as `f32`, each within `u` of
 //! the value its maker meant, and `q_k - 3 q_{k-1} + 3 q_{k-2} - q_{k-3}` (the
 //! jerk's numerator) amplifies that by at most 8, the acceleration's by 4,
-//! the velocity's by 2.
+//! the velocity's by 2. The ratios reported (*worst 3.2x its limit*) are
+//! of the figure less that allowance, `(|a| - 4u / h^2) / A`.
 //!
 //! **Ends at rest.** When the run reached its target, the final row's
 //! velocity (its last difference) must be below 1 % of every joint's rate
@@ -119,7 +120,8 @@ pub struct Peak {
 pub struct Excess {
     /// Rows where some joint is over the limit (beyond rounding).
     pub rows: usize,
-    /// The largest ratio to the limit over every row and joint, over or not.
+    /// The largest ratio to the limit over every row and joint, over or
+    /// not, of the figure less its rounding allowance (module docs).
     pub peak: Option<Peak>,
 }
 
@@ -429,8 +431,9 @@ pub fn measure(
             let mut over = false;
             for (j, l) in limits.iter().enumerate() {
                 let bound = [l.max_rate, l.max_accel, l.max_jerk][i];
-                let x = diff.values[k][j][i].abs();
-                over |= x > bound * (1.0 + LIMIT_SLACK) + diff.rounding[k][j][i];
+                // Beyond the rounding the positions may carry.
+                let x = (diff.values[k][j][i].abs() - diff.rounding[k][j][i]).max(0.0);
+                over |= x > bound * (1.0 + LIMIT_SLACK);
                 raise(&mut excess.peak, x / bound, problem, j, at);
             }
             excess.rows += over as usize;
@@ -442,8 +445,8 @@ pub fn measure(
         let k = trajectory.rows.len() - 1;
         let mut moving = false;
         for (j, l) in limits.iter().enumerate() {
-            let v = diff.values[k][j][0].abs();
-            moving |= v > AT_REST_FRACTION * l.max_rate + diff.rounding[k][j][0];
+            let v = (diff.values[k][j][0].abs() - diff.rounding[k][j][0]).max(0.0);
+            moving |= v > AT_REST_FRACTION * l.max_rate;
             raise(
                 &mut report.final_speed,
                 v / l.max_rate,
