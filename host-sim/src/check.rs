@@ -34,10 +34,18 @@
 //! an overlap beyond it is no rounding. Each row with such a pair, and each
 //! segment between rows with one at a configuration checked inside it, is
 //! one [`ViolationKind::SelfCollision`].
+//!
+//! The report also carries the *drive figures* ([`crate::drive_check`],
+//! issue 22): rows off the fixed control period, rows over the rate,
+//! acceleration or jerk limit by differences of the positions, arriving
+//! moving, braking stops that would collide. They are measured on every
+//! check and reject the trajectory only when [`drive_check::ENFORCED`]
+//! (off until the planner's tracker keeps them).
 use std::fmt;
 
 use capp_core::JointKind;
 
+use crate::drive_check::{self, DriveReport};
 use crate::geometry::{forward, Geometry, LinkGap};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
@@ -166,12 +174,18 @@ pub struct CheckReport {
     pub final_orientation_error: Option<f64>,
     /// Whether the final configuration is within the target's tolerances.
     pub reaches_target: bool,
+    /// The drive figures ([`crate::drive_check`]): the period, rate,
+    /// acceleration and jerk from positions, the end, the braking stops.
+    /// They reject the trajectory only when [`drive_check::ENFORCED`].
+    pub drive: DriveReport,
 }
 
 impl CheckReport {
-    /// Whether the trajectory broke no rule.
+    /// Whether the trajectory broke no rule; the drive figures count only
+    /// when [`drive_check::ENFORCED`] (off until the planner tracks the
+    /// drive limits, issue 22).
     pub fn accepted(&self) -> bool {
-        self.violations.is_empty()
+        self.violations.is_empty() && (!drive_check::ENFORCED || self.drive.clean())
     }
 
     /// Whether a violation of `kind` was found.
@@ -282,7 +296,8 @@ impl fmt::Display for CheckReport {
             } else {
                 "target not reached"
             }
-        )
+        )?;
+        write!(f, "{}", self.drive)
     }
 }
 
@@ -312,6 +327,7 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
         final_position_error: f64::INFINITY,
         final_orientation_error: None,
         reaches_target: false,
+        drive: DriveReport::new(problem.drive.control_period_s),
     };
     if trajectory.joints != n {
         report.violations.push(Violation {
@@ -580,6 +596,14 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
             }
         };
     }
+    report.drive = drive_check::measure(
+        problem,
+        geometry,
+        trajectory,
+        report.reaches_target,
+        self_tolerance,
+        scale(problem),
+    );
     report.violations = violations;
     report
 }

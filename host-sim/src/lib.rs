@@ -20,6 +20,7 @@
 //! | [`trajectory`] | reading a trajectory CSV back |
 //! | [`geometry`] | the independent f64 model of the robot, obstacles and link capsules (own kinematics, own super-ellipsoids, own segment distance), used by [`check`], the summary, [`render`] and the suite |
 //! | [`check`] | the independent trajectory checker (limits, rates, kinematics, clearance, self-collision), on [`geometry`] |
+//! | [`drive_check`] | whether a trajectory is motion a joint drive can follow (issue 22): the fixed period, rate, acceleration and jerk from positions, at rest on arrival, braking stops clear; the *drive figures* of [`check`]'s report |
 //! | [`render`] | SVG/PNG pictures with text, the 3-D `viewer.html`, `motion.gif`, report charts |
 //! | [`serial`] | `capp serial`: upload to a board, receive its stream, account for every setpoint |
 //! | [`cli`] | the `capp` command line |
@@ -31,6 +32,7 @@
 pub mod acm;
 pub mod check;
 pub mod cli;
+pub mod drive_check;
 pub mod escapes;
 pub mod geometry;
 pub mod input;

@@ -112,6 +112,74 @@ pub struct LinkGeometry {
 /// Seed of the sampled configurations of the allowed-collision matrix.
 pub const PAIR_SEED: u32 = 1;
 
+/// Default `[robot] ramp_time_s`: a joint reaches its rate limit from rest
+/// in this long at its acceleration limit (`max_accel = max_rate / ramp_time_s`).
+pub const DEFAULT_RAMP_TIME_S: f64 = 0.5;
+/// Default `[robot] jerk_time_s`: a joint reaches its acceleration limit
+/// from zero in this long at its jerk limit (`max_jerk = max_accel / jerk_time_s`).
+pub const DEFAULT_JERK_TIME_S: f64 = 0.1;
+/// Default `[settings] control_period_s`: the drives' fixed period, s.
+pub const DEFAULT_CONTROL_PERIOD_S: f64 = 0.05;
+
+/// One joint's drive limits, in the problem's units (radians or length
+/// units, per s, s^2, s^3). The rate is the joint's `max_rate` widened
+/// exactly from `f32`, the limit the planner works to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointDriveLimits {
+    /// Largest speed, per s (the joint's `max_rate`).
+    pub max_rate: f64,
+    /// Largest acceleration, per s^2.
+    pub max_accel: f64,
+    /// Largest jerk, per s^3.
+    pub max_jerk: f64,
+}
+
+impl JointDriveLimits {
+    /// The defaults from a rate: `max_accel = max_rate / ramp_time_s`,
+    /// `max_jerk = max_accel / jerk_time_s`.
+    pub fn from_rate(max_rate: f64, ramp_time_s: f64, jerk_time_s: f64) -> Self {
+        let max_accel = max_rate / ramp_time_s;
+        JointDriveLimits {
+            max_rate,
+            max_accel,
+            max_jerk: max_accel / jerk_time_s,
+        }
+    }
+}
+
+/// What a joint drive can follow (issue 22): a fixed control period and
+/// each joint's rate, acceleration and jerk limits. Today the independent
+/// checker ([`crate::drive_check`]) measures trajectories against them; the
+/// planner does not yet obey them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveLimits {
+    /// The drives' fixed period, s, in (0, 1].
+    pub control_period_s: f64,
+    /// Per joint, in joint order.
+    pub joints: Vec<JointDriveLimits>,
+}
+
+impl DriveLimits {
+    /// The defaults for `joints` ([`DEFAULT_RAMP_TIME_S`],
+    /// [`DEFAULT_JERK_TIME_S`], [`DEFAULT_CONTROL_PERIOD_S`]): what the
+    /// listing's `input.dat` and a file without drive keys get.
+    pub fn defaults(joints: &[Joint]) -> Self {
+        DriveLimits {
+            control_period_s: DEFAULT_CONTROL_PERIOD_S,
+            joints: joints
+                .iter()
+                .map(|j| {
+                    JointDriveLimits::from_rate(
+                        j.max_rate as f64,
+                        DEFAULT_RAMP_TIME_S,
+                        DEFAULT_JERK_TIME_S,
+                    )
+                })
+                .collect(),
+        }
+    }
+}
+
 /// A planning problem in the core's units (radians, the file's length unit, seconds).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Problem {
@@ -147,6 +215,8 @@ pub struct Problem {
     pub joint_goals: Vec<(usize, Vec<f32>)>,
     /// The links' capsules and allowed pairs.
     pub links: LinkGeometry,
+    /// The control period and each joint's rate, acceleration and jerk limits.
+    pub drive: DriveLimits,
     /// Where each item is in the file.
     pub lines: Lines,
 }
@@ -287,6 +357,7 @@ impl Problem {
     /// configuration) and returns the scenario.
     pub fn validate(&self) -> Result<CoreScenario, LoadError> {
         let scenario = self.scenario()?;
+        self.check_drive()?;
         CorePlanner::new(&scenario, &self.start).map_err(|e| {
             let message = match e {
                 StartError::OutsideLimits { joint } => {
@@ -321,6 +392,52 @@ impl Problem {
             self.error(self.lines.start, message)
         })?;
         Ok(scenario)
+    }
+
+    /// The drive limits ([`DriveLimits`]): the control period in (0, 1] s,
+    /// one entry per joint, every limit positive and finite (after the
+    /// core has checked the rates they default from).
+    fn check_drive(&self) -> Result<(), LoadError> {
+        let period = self.drive.control_period_s;
+        if !(period > 0.0 && period <= 1.0) {
+            return Err(self.error(
+                self.lines.settings,
+                format!("settings.control_period_s must be in (0, 1] s (got {period})"),
+            ));
+        }
+        if self.drive.joints.len() != self.joints.len() {
+            return Err(self.error(
+                self.lines.robot,
+                format!(
+                    "robot: drive limits for {} joints, the robot has {}",
+                    self.drive.joints.len(),
+                    self.joints.len()
+                ),
+            ));
+        }
+        for (j, limits) in self.drive.joints.iter().enumerate() {
+            for (name, value) in [
+                ("max_rate", limits.max_rate),
+                ("max_accel", limits.max_accel),
+                ("max_jerk", limits.max_jerk),
+            ] {
+                if !(value.is_finite() && value > 0.0) {
+                    return Err(self.error(
+                        self.lines
+                            .joints
+                            .get(j)
+                            .copied()
+                            .flatten()
+                            .or(self.lines.robot),
+                        format!(
+                            "robot: {}: {name} must be positive and finite (got {value})",
+                            self.joint_label(j)
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// `joint 3 ("name")` for messages.

@@ -524,3 +524,74 @@ fn toml_start_in_self_collision_names_the_two_links() {
     let dir = tempfile::tempdir().unwrap();
     Problem::load(&write(&dir, "ok.toml", &allowed)).unwrap();
 }
+
+#[test]
+fn toml_bad_drive_limits() {
+    // A joint's own limit: the line of its joint, in the file's units.
+    let text =
+        planar("", PLANAR_TAIL).replacen("max_rate = 30.0", "max_rate = 30.0\nmax_accel = nan", 1);
+    rejects(
+        "a.toml",
+        &text,
+        6,
+        "robot: joint 1: max_accel must be positive and finite (got NaN)",
+    );
+    let text = planar(THIRD_JOINT, PLANAR_TAIL).replace(
+        "max = 175.0\nmax_rate = 30.0",
+        "max = 175.0\nmax_rate = 30.0\nmax_jerk = -5.0",
+    );
+    rejects(
+        "j.toml",
+        &text,
+        24,
+        "robot: joint 3 (\"wrist\"): max_jerk must be positive and finite (got -5)",
+    );
+    // An override: its own line.
+    let text = planar(
+        THIRD_JOINT,
+        &format!("\n[[robot.overrides]]\njoint = 2\nmax_accel = 0.0\n{PLANAR_TAIL}"),
+    );
+    rejects(
+        "o.toml",
+        &text,
+        34,
+        "robot override of joint 2: max_accel must be positive and finite (got 0)",
+    );
+    // The robot-wide times: the robot's line.
+    for key in ["ramp_time_s = 0.0", "jerk_time_s = inf"] {
+        let text =
+            planar("", PLANAR_TAIL).replace("[units]", &format!("[robot]\n{key}\n\n[units]"));
+        let name = key.split(' ').next().unwrap();
+        rejects(
+            "t.toml",
+            &text,
+            2,
+            &format!("robot.{name} must be positive and finite"),
+        );
+    }
+    // The control period: in (0, 1] s, the settings' line.
+    for (period, shown) in [
+        ("0.0", "0"),
+        ("1.5", "1.5"),
+        ("-0.05", "-0.05"),
+        ("nan", "NaN"),
+    ] {
+        let text = planar(
+            "",
+            &format!("{PLANAR_TAIL}\n[settings]\ncontrol_period_s = {period}\n"),
+        );
+        rejects(
+            "p.toml",
+            &text,
+            33,
+            &format!("settings.control_period_s must be in (0, 1] s (got {shown})"),
+        );
+    }
+    // 1 s is allowed.
+    let text = planar(
+        "",
+        &format!("{PLANAR_TAIL}\n[settings]\ncontrol_period_s = 1.0\n"),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    Problem::load(&write(&dir, "ok.toml", &text)).unwrap();
+}

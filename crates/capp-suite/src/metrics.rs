@@ -16,6 +16,13 @@
 //! to the final configuration at the rate limits, `max_j |q_end_j -
 //! q_start_j| / max_rate_j`.
 //!
+//! Drive figures (issue 22) are `capp check`'s
+//! ([`capp_sim::drive_check`]): from the positions alone, rows off the fixed
+//! control period, rows over the rate, acceleration or jerk limit, whether a
+//! run that reached arrives moving, and rows whose braking stop would
+//! collide. They are measurements, not violations (not in
+//! [`RunMetrics::violations`]) until the planner tracks the limits.
+//!
 //! Escapes (`capp_core::escape`) are counted from the planner's step reports
 //! ([`capp_sim::escapes`]): walks and detours made, the side of the blocking
 //! obstacle each took, and whether the run ended by the return to the best
@@ -101,6 +108,48 @@ impl EscapeCounts {
     }
 }
 
+/// A run's drive figures ([`capp_sim::drive_check::DriveReport`], in brief).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DriveFigures {
+    /// Rows not at `t = k dt`.
+    pub off_period: usize,
+    /// Rows with a joint over its rate limit (by differences of positions).
+    pub over_rate: usize,
+    /// Rows over an acceleration limit.
+    pub over_accel: usize,
+    /// Rows over a jerk limit.
+    pub over_jerk: usize,
+    /// Reached with a joint above 1 % of its rate.
+    pub arrives_moving: bool,
+    /// Rows whose braking stop would collide.
+    pub braking_collisions: usize,
+    /// The largest acceleration over its limit, a ratio (`None`: one row).
+    pub peak_accel: Option<f64>,
+    /// The largest jerk over its limit, a ratio.
+    pub peak_jerk: Option<f64>,
+}
+
+impl DriveFigures {
+    /// The figures of `drive`.
+    pub fn of(drive: &capp_sim::drive_check::DriveReport) -> Self {
+        DriveFigures {
+            off_period: drive.off_period,
+            over_rate: drive.rate.rows,
+            over_accel: drive.accel.rows,
+            over_jerk: drive.jerk.rows,
+            arrives_moving: drive.arrives_moving,
+            braking_collisions: drive.braking_collisions,
+            peak_accel: drive.accel.peak.as_ref().map(|p| p.ratio),
+            peak_jerk: drive.jerk.peak.as_ref().map(|p| p.ratio),
+        }
+    }
+
+    /// Whether any row is over the rate, acceleration or jerk limit.
+    pub fn over_limit(&self) -> bool {
+        self.over_rate + self.over_accel + self.over_jerk > 0
+    }
+}
+
 /// One planner run, measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunMetrics {
@@ -157,6 +206,8 @@ pub struct RunMetrics {
     pub wall_ms: f64,
     /// Dead-end escapes.
     pub escape: EscapeCounts,
+    /// What a joint drive could follow of it (issue 22).
+    pub drive: DriveFigures,
     /// FNV-1a (64 bits) over every row's step, time step, joint values and
     /// `V`, as `f32` bits, and the outcome: two runs with the same
     /// fingerprint made the same trajectory to the bit (a refactor's
@@ -307,6 +358,7 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         dense_checks,
         wall_ms: result.wall_time.as_secs_f64() * 1e3,
         escape: EscapeCounts::of(&result.rows),
+        drive: DriveFigures::of(&report.drive),
         fingerprint: fingerprint(result),
     }
 }

@@ -278,6 +278,43 @@ impl Tally<'_> {
     }
 }
 
+impl Tally<'_> {
+    fn drive_row(&self, lead: &str) -> String {
+        let runs = self.runs.len();
+        let share = |f: &dyn Fn(&RunMetrics) -> bool| {
+            let n = self.runs.iter().filter(|(_, m)| f(m)).count();
+            format!("{n} ({})", pct(n, runs))
+        };
+        let reached = self.count(Outcome::Reached);
+        let moving = self
+            .reached()
+            .filter(|(_, m)| m.drive.arrives_moving)
+            .count();
+        let peaks = |f: &dyn Fn(&RunMetrics) -> Option<f64>| -> Vec<f64> {
+            self.runs.iter().filter_map(|(_, m)| f(m)).collect()
+        };
+        let accel = peaks(&|m| m.drive.peak_accel);
+        let jerk = peaks(&|m| m.drive.peak_jerk);
+        format!(
+            "| {lead} | {runs} | {} | {} | {} / {} / {} | {moving} of {reached} ({}) | {} | {} / {} | {} / {} |",
+            share(&|m| m.drive.off_period > 0),
+            share(&|m| m.drive.over_limit()),
+            share(&|m| m.drive.over_rate > 0),
+            share(&|m| m.drive.over_accel > 0),
+            share(&|m| m.drive.over_jerk > 0),
+            pct(moving, reached),
+            share(&|m| m.drive.braking_collisions > 0),
+            opt(median(&accel), 1),
+            opt(accel.iter().copied().reduce(f64::max), 1),
+            opt(median(&jerk), 1),
+            opt(jerk.iter().copied().reduce(f64::max), 1),
+        )
+    }
+}
+
+const DRIVE_HEAD: &str = "| runs | any row off the period | any row over a limit | over rate / acceleration / jerk | reached, arriving moving | any braking stop colliding | peak acceleration / limit, median / max | peak jerk / limit, median / max |";
+const DRIVE_RULE: &str = "|---|---|---|---|---|---|---|---|";
+
 const ESCAPE_HEAD: &str = "| runs | escaped (any attempt) | escaped and reached | attempts of those, median / max | their motion time, median (s) | RRT shortcut path on the same cases, median (s) | motion / RRT: ratio of the medians | motion / RRT: median of the ratios | ended by the return (attempts spent) | detours: sides taken | walks: sides taken | searched paths: sides taken |";
 const ESCAPE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|";
 
@@ -417,6 +454,34 @@ pub fn markdown_with_figures(
     let _ = writeln!(s, "|---{TABLE_RULE}");
     for v in variants {
         let _ = writeln!(s, "{}", Tally::new(&all, v.name).row(v.name));
+    }
+
+    // Drive figures (issue 22).
+    s.push_str(
+        "\n## What a joint drive could follow (issue 22)\n\n\
+         Measured by the independent checker from the positions alone (`capp_sim::drive_check`, \
+         `capp check`'s *drive figures*), against each joint's rate, acceleration and jerk limits \
+         (defaults: full rate from rest in 0.5 s, full acceleration in 0.1 s) and the fixed control \
+         period (0.05 s): *off the period*, a row not at `t = k dt`; *over a limit*, a row where \
+         some joint's backward difference (velocity, acceleration or jerk, over the row's own \
+         interval, a zero-time hold as one period, rest before the first row) exceeds its limit \
+         beyond `f32` rounding; *arriving moving*, a reached run whose last row has a joint above \
+         1 % of its rate; *braking stop colliding*, a run with a row from which each joint braking \
+         to rest at its limits would hit an obstacle or another link (every tick and densely \
+         between). Shares of runs; the peaks are the largest ratio per run. Not yet enforced: the \
+         planner does not track these limits (issue 22 in progress), so these are today's figures.\n\n",
+    );
+    let _ = writeln!(s, "| family | variant {DRIVE_HEAD}");
+    let _ = writeln!(s, "|---|---{DRIVE_RULE}");
+    family_rows(&mut s, results, families, variants, |t, lead| {
+        t.drive_row(lead)
+    });
+    for v in variants {
+        let _ = writeln!(
+            s,
+            "{}",
+            Tally::new(&all, v.name).drive_row(&format!("all | {}", v.name))
+        );
     }
 
     // Figures (a full run writes them).
@@ -735,7 +800,7 @@ fn escape_sides(e: &crate::metrics::EscapeCounts) -> String {
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,self_collisions,closest_link_gap,not_finite,joint_limit,rate_limit,other,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,self_collisions,closest_link_gap,not_finite,joint_limit,rate_limit,other,drive_off_period_rows,drive_over_rate_rows,drive_over_accel_rows,drive_over_jerk_rows,drive_arrives_moving,drive_braking_collisions,drive_peak_accel_ratio,drive_peak_jerk_ratio,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
     // A refused file: every measurement column empty (all but the case's 4,
@@ -764,7 +829,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
                         capp_sim::output::summary::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -784,6 +849,14 @@ pub fn csv(results: &[CaseResult]) -> String {
                         m.joint_limit,
                         m.rate_limit,
                         m.other,
+                        m.drive.off_period,
+                        m.drive.over_rate,
+                        m.drive.over_accel,
+                        m.drive.over_jerk,
+                        m.drive.arrives_moving,
+                        m.drive.braking_collisions,
+                        o(m.drive.peak_accel),
+                        o(m.drive.peak_jerk),
                         m.escape.attempts(),
                         m.escape.walks,
                         m.escape.detours,

@@ -300,6 +300,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     } else {
         (0.5 * settings.avoidance.link_margin, Vec::new())
     };
+    // The listing has no drive limits: the defaults from its rates.
+    let drive = crate::problem::DriveLimits::defaults(&joints);
     Ok(Problem {
         joint_goals: Vec::new(),
         name,
@@ -322,6 +324,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             allowed,
             home: listing_home,
         },
+        drive,
         lines: Lines {
             robot: Some(n_line),
             joints: joint_lines,

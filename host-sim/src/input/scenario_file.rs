@@ -21,7 +21,10 @@ use capp_core::{
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::problem::{LoadError, Problem, SourceKind, MAX_JOINTS};
+use crate::problem::{
+    DriveLimits, JointDriveLimits, LoadError, Problem, SourceKind, DEFAULT_CONTROL_PERIOD_S,
+    DEFAULT_JERK_TIME_S, DEFAULT_RAMP_TIME_S, MAX_JOINTS,
+};
 
 /// Length of one inch in metres.
 pub const INCH_M: f64 = 0.0254;
@@ -82,6 +85,10 @@ struct RobotSpec {
     /// More pairs of links allowed to touch.
     #[serde(default)]
     allow: Vec<Spanned<AllowSpec>>,
+    /// Default `max_accel = max_rate / ramp_time_s`, s.
+    ramp_time_s: Option<f64>,
+    /// Default `max_jerk = max_accel / jerk_time_s`, s.
+    jerk_time_s: Option<f64>,
 }
 
 /// `[[robot.allow]] links = [a, b]`: two links, by DH number (1 to n, link
@@ -122,6 +129,10 @@ struct JointSpec {
     min: f64,
     max: f64,
     max_rate: f64,
+    /// Acceleration limit, angle or length units per s^2.
+    max_accel: Option<f64>,
+    /// Jerk limit, angle or length units per s^3.
+    max_jerk: Option<f64>,
     #[serde(default = "one")]
     weight: f64,
     /// Capsule radius of the link after this joint, length units.
@@ -139,6 +150,8 @@ struct OverrideSpec {
     min: Option<f64>,
     max: Option<f64>,
     max_rate: Option<f64>,
+    max_accel: Option<f64>,
+    max_jerk: Option<f64>,
     weight: Option<f64>,
     radius: Option<f64>,
 }
@@ -178,6 +191,7 @@ struct ObstacleSpec {
 struct SettingsSpec {
     characteristic_length: Option<f64>,
     time_step_s: Option<f64>,
+    control_period_s: Option<f64>,
     fine_radius: Option<f64>,
     fine_step_fraction: Option<f64>,
     position_tolerance: Option<f64>,
@@ -267,6 +281,20 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let robot = file.robot;
     let preset_pips = robot.preset.is_some();
     let mut radii: Vec<Option<f32>> = Vec::new();
+    // Per joint, the acceleration and jerk limits the file gives (internal
+    // units); the others default from the rate once overrides are applied.
+    let mut drive_given: Vec<[Option<f64>; 2]> = Vec::new();
+    // A drive limit as given: positive and finite, in the file's units.
+    let positive = |line: usize, what: String, v: Option<f64>| -> Result<(), LoadError> {
+        match v {
+            Some(x) if !(x.is_finite() && x > 0.0) => Err(LoadError::new(
+                path,
+                Some(line),
+                format!("{what} must be positive and finite (got {x})"),
+            )),
+            _ => Ok(()),
+        }
+    };
     let (mut joints, mut names, mut joint_lines, mut home) = match (&robot.preset, robot.joints) {
         (Some(_), Some(_)) => {
             return Err(err(
@@ -303,6 +331,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             let names = (1..=joints.len()).map(|i| format!("pips{i}")).collect();
             let lines = vec![Some(robot_line); joints.len()];
             radii = vec![None; joints.len()];
+            drive_given = vec![[None; 2]; joints.len()];
             (joints, names, lines, home)
         }
         (None, Some(specs)) => {
@@ -317,6 +346,17 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 let line = at(spec.span());
                 let s = spec.into_inner();
                 radii.push(s.radius.map(|r| r as f32));
+                let label = match s.name.as_str() {
+                    "" => format!("robot: joint {}", joints.len() + 1),
+                    name => format!("robot: joint {} (\"{name}\")", joints.len() + 1),
+                };
+                positive(line, format!("{label}: max_accel"), s.max_accel)?;
+                positive(line, format!("{label}: max_jerk"), s.max_jerk)?;
+                let unit = match s.kind {
+                    JointType::Revolute => angle,
+                    JointType::Prismatic => 1.0,
+                };
+                drive_given.push([s.max_accel.map(|v| v * unit), s.max_jerk.map(|v| v * unit)]);
                 let (joint, q0) = match s.kind {
                     JointType::Revolute => (
                         Joint {
@@ -382,6 +422,23 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         if let Some(v) = o.max_rate {
             j.max_rate = (v * unit) as f32;
         }
+        positive(
+            line,
+            format!("robot override of joint {}: max_accel", o.joint),
+            o.max_accel,
+        )?;
+        positive(
+            line,
+            format!("robot override of joint {}: max_jerk", o.joint),
+            o.max_jerk,
+        )?;
+        let given = &mut drive_given[o.joint - 1];
+        if let Some(v) = o.max_accel {
+            given[0] = Some(v * unit);
+        }
+        if let Some(v) = o.max_jerk {
+            given[1] = Some(v * unit);
+        }
         if let Some(v) = o.weight {
             j.weight = v as f32;
         }
@@ -393,6 +450,26 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     if names.iter().all(|n| n.is_empty()) {
         names.clear();
     }
+
+    // Drive limits: those given, else from the rate (the rate as the core
+    // holds it, after the preset's unit conversion and the overrides).
+    let ramp_time_s = robot.ramp_time_s.unwrap_or(DEFAULT_RAMP_TIME_S);
+    let jerk_time_s = robot.jerk_time_s.unwrap_or(DEFAULT_JERK_TIME_S);
+    positive(robot_line, "robot.ramp_time_s".into(), Some(ramp_time_s))?;
+    positive(robot_line, "robot.jerk_time_s".into(), Some(jerk_time_s))?;
+    let drive_joints: Vec<JointDriveLimits> = joints
+        .iter()
+        .zip(&drive_given)
+        .map(|(j, [accel, jerk])| {
+            let max_rate = j.max_rate as f64;
+            let max_accel = accel.unwrap_or(max_rate / ramp_time_s);
+            JointDriveLimits {
+                max_rate,
+                max_accel,
+                max_jerk: jerk.unwrap_or(max_accel / jerk_time_s),
+            }
+        })
+        .collect();
 
     // Pairs of links allowed to touch, by number or joint name.
     let mut allowed: Vec<(usize, usize)> = if preset_pips {
@@ -622,6 +699,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         (None, Err(_)) => default_settings(per_inch as f32),
     };
     settings.time_step_s = f(s.time_step_s, settings.time_step_s);
+    let control_period_s = s.control_period_s.unwrap_or(DEFAULT_CONTROL_PERIOD_S);
+    if !(control_period_s > 0.0 && control_period_s <= 1.0) {
+        return Err(LoadError::new(
+            path,
+            settings_line,
+            format!("settings.control_period_s must be in (0, 1] s (got {control_period_s})"),
+        ));
+    }
     settings.fine_radius = f(s.fine_radius, settings.fine_radius);
     settings.fine_step_fraction = f(s.fine_step_fraction, settings.fine_step_fraction);
     settings.position_tolerance = f(s.position_tolerance, settings.position_tolerance);
@@ -751,6 +836,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         start,
         setpoints,
         links,
+        drive: DriveLimits {
+            control_period_s,
+            joints: drive_joints,
+        },
         lines: crate::problem::Lines {
             robot: Some(robot_line),
             joints: joint_lines,
