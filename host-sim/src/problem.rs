@@ -309,7 +309,37 @@ impl Problem {
                 .set_link_capsules(&self.links.radius, table.checked_rows())
                 .map_err(|e| self.capsule_error(e))?;
         }
+        // The defaults are the core's own (computed in f32, as the board
+        // computes them), so host and board plan to the bit.
+        let accel: Vec<f32> = self.drive.joints.iter().map(|j| j.max_accel as f32).collect();
+        let jerk: Vec<f32> = self.drive.joints.iter().map(|j| j.max_jerk as f32).collect();
+        let set = if self.default_drive_limits() {
+            Ok(())
+        } else {
+            scenario.set_drive_limits(&accel, &jerk)
+        };
+        set.map_err(|e| {
+            let line = match e {
+                ScenarioError::Drive { joint, .. } => {
+                    self.lines.joints.get(joint as usize).copied().flatten()
+                }
+                _ => self.lines.robot,
+            };
+            self.error(line, e.to_string())
+        })?;
         Ok(scenario)
+    }
+
+    /// Whether every joint's acceleration and jerk limits are the defaults
+    /// from its rate (capp-core's `DriveLimits::from_rate`, to a part in a
+    /// million: the file's are computed in f64), the only ones the board
+    /// knows (the protocol does not carry others yet).
+    pub fn default_drive_limits(&self) -> bool {
+        let near = |a: f64, b: f32| (a - b as f64).abs() <= 1e-6 * (b as f64).abs();
+        self.joints.iter().zip(&self.drive.joints).all(|(j, d)| {
+            let core = capp_core::tracker::limits::DriveLimits::from_rate(j.max_rate);
+            near(d.max_accel, core.max_accel) && near(d.max_jerk, core.max_jerk)
+        })
     }
 
     /// Which pairs of links are checked and why the others are skipped

@@ -157,6 +157,10 @@ pub enum SerialError {
     },
     /// The plan was stopped (by another host) before it ended.
     Stopped,
+    /// Tracked motion with acceleration or jerk limits of its own, which
+    /// the protocol does not carry yet (the board would plan with the
+    /// defaults from the rates).
+    DriveLimits,
 }
 
 impl fmt::Display for SerialError {
@@ -168,6 +172,11 @@ impl fmt::Display for SerialError {
                 "the board speaks protocol version {board}, this host {host}: flash matching firmware"
             ),
             SerialError::Stopped => write!(f, "the plan was stopped before it ended"),
+            SerialError::DriveLimits => write!(
+                f,
+                "tracked motion with max_accel or max_jerk of its own: the board knows only the defaults from the rates (protocol {})",
+                capp_proto::VERSION
+            ),
         }
     }
 }
@@ -191,6 +200,9 @@ pub fn plan_on_board<T: Read + Write>(
     idle: Duration,
     watch: impl FnMut(&Status),
 ) -> Result<(RunResult, LinkReport), SerialError> {
+    if problem.settings.motion == capp_core::Motion::Tracked && !problem.default_drive_limits() {
+        return Err(SerialError::DriveLimits);
+    }
     let protocol = link.ping(0x0CA9_9000)?;
     if protocol != capp_proto::VERSION {
         return Err(SerialError::Version {

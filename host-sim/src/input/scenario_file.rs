@@ -16,7 +16,7 @@ use std::path::Path;
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
 use capp_core::{
-    pips, Joint, JointKind, Robot, SetpointFilter, Settings, SuperEllipsoid, Waypoint,
+    pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, SuperEllipsoid, Waypoint,
 };
 use serde::Deserialize;
 use toml::Spanned;
@@ -207,6 +207,7 @@ struct SettingsSpec {
     advance_fraction: Option<f64>,
     damping: Option<f64>,
     saturation: Option<bool>,
+    motion: Option<MotionSpec>,
     max_steps: Option<u32>,
     stall_window: Option<u32>,
     stall_progress: Option<f64>,
@@ -217,6 +218,13 @@ struct SettingsSpec {
     escape_reach: Option<f64>,
     escape_seed: Option<u32>,
     escape_searches: Option<u8>,
+}
+
+#[derive(Deserialize, PartialEq)]
+#[serde(rename_all = "lowercase")]
+enum MotionSpec {
+    Stepped,
+    Tracked,
 }
 
 #[derive(Deserialize)]
@@ -719,6 +727,18 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         };
     }
     settings.law.damping = f(s.damping, settings.law.damping);
+    if s.motion == Some(MotionSpec::Tracked) {
+        // The tracker's tick is the drives' period.
+        if s.time_step_s.is_some_and(|h| h != control_period_s) {
+            return Err(LoadError::new(
+                path,
+                settings_line,
+                "settings.time_step_s: with motion = \"tracked\" the step is control_period_s; give that one",
+            ));
+        }
+        settings.motion = Motion::Tracked;
+        settings.time_step_s = control_period_s as f32;
+    }
     if let Some(v) = s.saturation {
         settings.law.saturation = v;
     }
