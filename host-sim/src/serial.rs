@@ -312,6 +312,7 @@ fn derived_row(scenario: &CoreScenario, s: &capp_link::Setpoint, h: f32) -> Row 
         &settings.avoidance,
         &mut mu[..s.joints.len()],
         &mut distance[..s.joints.len()],
+        None,
     );
     let p = frames.end_position();
     let r = frames.end_rotation();

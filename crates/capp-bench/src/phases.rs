@@ -99,6 +99,7 @@ impl<const N: usize> PhaseBench<N> {
             &mut self.distance_sq[..n],
             self.field.nearest.map(|h| h.link),
             0.0,
+            None,
         )
         .potential
     }
@@ -166,6 +167,7 @@ impl<const N: usize> PhaseBench<N> {
             &scenario.settings().avoidance,
             &mut self.mu,
             &mut self.distance_sq,
+            None,
         );
         self.field.potential
     }

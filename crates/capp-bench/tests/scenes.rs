@@ -86,6 +86,7 @@ fn listing_differences_match_the_exact_products() {
         &scenario.settings().avoidance,
         &mut mu,
         &mut distance,
+        None,
     );
     let scale = mu.iter().fold(0.0f32, |a, m| a.max(m.abs()));
     for (j, (fd, exact)) in listing.obstacle_gradient().iter().zip(&mu).enumerate() {

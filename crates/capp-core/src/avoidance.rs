@@ -221,6 +221,10 @@ pub struct ObstacleField {
 /// (length units squared; the influence distance's square when no obstacle
 /// is within it, infinity when there are none; see
 /// [`crate::obstacle::Contact::distance_sq`]).
+///
+/// `planes` (the tracker's, one per link): each link's half-space against
+/// its nearest obstacle, as [`ObstacleField::nearest`] is for the arm's
+/// nearest link (`None` where it has none).
 pub fn potential_gradient<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -228,6 +232,7 @@ pub fn potential_gradient<const N: usize>(
     settings: &AvoidanceSettings,
     mu: &mut [f32],
     distance_sq: &mut [f32],
+    mut planes: Option<&mut [Option<HalfSpace>]>,
 ) -> ObstacleField {
     let mut force = Vec3::zeros();
     let mut moment = Vec3::zeros();
@@ -312,6 +317,21 @@ pub fn potential_gradient<const N: usize>(
             sliding_force += f * point.t;
         }
         distance_sq[j] = link_sq;
+        if let Some(plane) = planes.as_mut().and_then(|p| p.get_mut(j)) {
+            *plane = if link_obstacle != u8::MAX {
+                half_space(
+                    frames,
+                    obstacles,
+                    settings,
+                    j as u8,
+                    link_point,
+                    link_obstacle,
+                    others_sq,
+                )
+            } else {
+                None
+            };
+        }
         if link_sq < nearest_sq && link_obstacle != u8::MAX {
             nearest_sq = link_sq;
             nearest = Some((j as u8, link_point, link_obstacle, others_sq));

@@ -3,12 +3,12 @@
 //! slots of them (the current configuration and the candidate). The escape's
 //! search evaluates its imagined configurations into the candidate slot.
 
-use crate::avoidance::{potential_gradient, ObstacleField};
+use crate::avoidance::{potential_gradient, HalfSpace, ObstacleField};
 use crate::control::joint_space::joint_v;
 use crate::control::LawInput;
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::scenario::Scenario;
-use crate::self_collision::field::{link_pairs, SelfField};
+use crate::self_collision::field::{link_pairs, ClosePairs, SelfField};
 use crate::self_collision::INFLUENCE;
 use crate::target::{pose_error, PoseError, Target};
 
@@ -46,6 +46,14 @@ pub struct Evaluation<const N: usize> {
     pub field: ObstacleField,
     /// What the checked link pairs say (their potential, the closest pair).
     pub links: SelfField,
+    /// With [`crate::Motion::Tracked`]: the link pairs measured, whose
+    /// relative motion the tracker bounds (their gaps are not in
+    /// `distance_sq`).
+    pub close_pairs: ClosePairs,
+    /// With [`crate::Motion::Tracked`]: each link's half-space against its
+    /// nearest obstacle, along which it may slide
+    /// ([`crate::tracker::clearance`]).
+    pub planes: [Option<HalfSpace>; N],
 }
 
 impl<const N: usize> Default for Evaluation<N> {
@@ -64,6 +72,8 @@ impl<const N: usize> Evaluation<N> {
             distance_sq: [0.0; N],
             field: ObstacleField::default(),
             links: SelfField::default(),
+            close_pairs: ClosePairs::new(),
+            planes: [None; N],
         }
     }
 
@@ -77,7 +87,11 @@ impl<const N: usize> Evaluation<N> {
             distance_sq,
             field,
             links,
+            close_pairs,
+            planes,
         } = self;
+        close_pairs.clear();
+        planes.fill(None);
         *frames = Frames::default();
         *error = PoseError::default();
         mu.fill(0.0);
@@ -163,19 +177,54 @@ impl<const N: usize> Evaluation<N> {
             &scenario.settings().avoidance,
             &mut self.mu,
             &mut self.distance_sq,
+            if scenario.settings().motion == crate::Motion::Tracked {
+                Some(&mut self.planes[..])
+            } else {
+                None
+            },
         );
         let capsules = scenario.capsules();
+        self.close_pairs.clear();
         if capsules.is_on() {
             let n = robot.len().min(N);
-            self.links = link_pairs(
-                robot,
-                &self.frames,
-                capsules,
-                &mut self.mu[..n],
-                &mut self.distance_sq[..n],
-                self.field.nearest.map(|h| h.link),
-                far_pairs(scenario.settings()),
-            );
+            if scenario.settings().motion == crate::Motion::Tracked {
+                // The links' rooms against their link pairs apart, so each
+                // plane's other room holds them too.
+                let mut rooms = [f32::INFINITY; N];
+                self.links = link_pairs(
+                    robot,
+                    &self.frames,
+                    capsules,
+                    &mut self.mu[..n],
+                    &mut rooms[..n],
+                    None,
+                    far_pairs(scenario.settings()),
+                    Some(&mut self.close_pairs),
+                );
+                for ((d, plane), &room) in self
+                    .distance_sq
+                    .iter_mut()
+                    .zip(self.planes.iter_mut())
+                    .zip(&rooms)
+                    .take(n)
+                {
+                    *d = crate::math::min(*d, room);
+                    if let Some(h) = plane.as_mut() {
+                        h.others_sq = crate::math::min(h.others_sq, room);
+                    }
+                }
+            } else {
+                self.links = link_pairs(
+                    robot,
+                    &self.frames,
+                    capsules,
+                    &mut self.mu[..n],
+                    &mut self.distance_sq[..n],
+                    self.field.nearest.map(|h| h.link),
+                    far_pairs(scenario.settings()),
+                    None,
+                );
+            }
             // The link of the nearest obstacle pair slides along its
             // half-space; its other room must hold its link pairs too.
             if let Some(h) = self.field.nearest.as_mut() {

@@ -78,6 +78,7 @@ fn potential_gradient_matches_central_differences() {
                     &settings,
                     &mut mu[..n],
                     &mut distance[..n],
+                    None,
                 );
                 assert!(field.clear);
                 let p64 = potential64(&joints, &q64, &obstacles, margins, interior as usize);
@@ -152,6 +153,7 @@ fn the_nearest_half_space_holds_the_obstacle_under_either_margin() {
                 &settings,
                 &mut mu[..n],
                 &mut distance[..n],
+                None,
             );
             let Some(plane) = field.nearest.filter(|_| field.clear) else {
                 continue;

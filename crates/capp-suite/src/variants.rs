@@ -28,6 +28,11 @@ pub fn variants() -> Vec<Variant> {
             settings: "",
         },
         Variant {
+            name: "tracked",
+            description: "the defaults under the tracker (`motion = \"tracked\"`, issue 22): a fixed control period, each joint within its rate, acceleration and jerk limits, every tick's stop cleared, arrival at rest",
+            settings: "motion = \"tracked\"",
+        },
+        Variant {
             name: "uniform",
             description: "the default law with each rate-limited step scaled uniformly into the rate limits, only its most loaded joint at its limit (`saturation = false`)",
             settings: "saturation = false",

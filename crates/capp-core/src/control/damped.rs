@@ -464,8 +464,18 @@ pub fn damped_rate<const N: usize>(
     if !(time_at_limits > 0.0 && time_at_limits.is_finite()) {
         return idle(rate);
     }
-    let arrival_s = max(time_at_limits, time_step_s);
-    let k = 1.0 / arrival_s;
+    let step_s = max(time_at_limits, time_step_s);
+    // How many such steps the rest of the way takes: `V` over the step's
+    // predicted decrease `G . dq` (about `2 V` for a Gauss-Newton step that
+    // removes the whole error; less for a damped one far away).
+    let decrease: f32 = ws.drive.iter().zip(rate.iter()).map(|(g, r)| g * r).sum();
+    let steps = if decrease > 0.0 {
+        max(1.0, 2.0 * error.v / decrease)
+    } else {
+        f32::INFINITY
+    };
+    let arrival_s = step_s * steps;
+    let k = 1.0 / step_s;
     rate.iter_mut().for_each(|r| *r *= k);
     Proposal {
         drive: Drive::Damped,

@@ -106,6 +106,8 @@ impl<const N: usize> Planner<N> {
                 robot,
                 &now.frames,
                 &now.distance_sq[..n],
+                &now.planes[..n],
+                &now.close_pairs,
                 &next,
                 limits,
                 dt,

@@ -44,6 +44,14 @@ pub struct LinkPair {
     pub links: [u8; 2],
 }
 
+/// Most link pairs an evaluation keeps for the tracker's relative test
+/// ([`link_pairs`]'s `close`); pairs beyond it give rooms as before.
+pub const MAX_CLOSE_PAIRS: usize = 64;
+
+/// The link pairs near enough to be measured, for the tracker's relative
+/// test ([`crate::tracker::clearance`]).
+pub type ClosePairs = heapless::Vec<LinkPair, MAX_CLOSE_PAIRS>;
+
 /// What the link pairs say about one configuration.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -74,6 +82,12 @@ pub struct SelfField {
 /// spheres (one square root each), and pairs farther still give each link
 /// `far / 2` more than its far room; so a link's room grows with its
 /// distance from the others instead of stopping at its far room.
+///
+/// `close` (the tracker's): the measured pairs are kept there (gap, links)
+/// instead of lowering the two links' rooms, while it has room; the
+/// tracker bounds their relative motion instead of each link's own
+/// ([`crate::tracker::clearance`]).
+#[allow(clippy::too_many_arguments)]
 pub fn link_pairs<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -82,6 +96,7 @@ pub fn link_pairs<const N: usize>(
     room_sq: &mut [f32],
     pressed: Option<u8>,
     far: f32,
+    mut close: Option<&mut ClosePairs>,
 ) -> SelfField {
     let mut field = SelfField {
         clear: true,
@@ -147,7 +162,18 @@ pub fn link_pairs<const N: usize>(
                     let inflation = INFLUENCE * CLEARANCE_SCALE * (r_a + r_b);
                     let gap = libm::sqrtf(centres_sq) - reach + inflation;
                     let share = 0.5 * max(gap, 0.0);
+                    let kept = close.as_mut().is_some_and(|c| {
+                        c.push(LinkPair {
+                            clearance: f32::INFINITY,
+                            gap,
+                            links: [a as u8, b as u8],
+                        })
+                        .is_ok()
+                    });
                     for k in [a, b] {
+                        if kept {
+                            break;
+                        }
                         if let Some(room) = room_sq.get_mut(k) {
                             *room = min(*room, share * share);
                         }
@@ -170,7 +196,19 @@ pub fn link_pairs<const N: usize>(
             let scale = CLEARANCE_SCALE * radii;
             let c = gap / scale;
             let share = 0.5 * max(gap, 0.0);
+            let kept = close.as_mut().is_some_and(|close| {
+                close
+                    .push(LinkPair {
+                        clearance: c,
+                        gap,
+                        links: [a as u8, b as u8],
+                    })
+                    .is_ok()
+            });
             for k in [a, b] {
+                if kept {
+                    break;
+                }
                 if let Some(room) = room_sq.get_mut(k) {
                     *room = min(*room, share * share);
                 }
@@ -274,7 +312,7 @@ mod tests {
         let potential = |q: &[f32], frames: &mut Frames<8>| {
             forward_kinematics(&robot, q, frames);
             let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
-            link_pairs(&robot, frames, &caps, &mut mu, &mut room, None, 0.0)
+            link_pairs(&robot, frames, &caps, &mut mu, &mut room, None, 0.0, None)
         };
         let mut tested = 0;
         for _ in 0..400 {
@@ -284,7 +322,7 @@ mod tests {
             });
             forward_kinematics(&robot, &q, &mut frames);
             let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
-            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None, 0.0);
+            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None, 0.0, None);
             if field.active_pairs == 0 || !field.clear || field.closest.unwrap().clearance < 0.3 {
                 continue;
             }
@@ -329,7 +367,7 @@ mod tests {
             });
             forward_kinematics(&robot, &q, &mut frames);
             let (mut mu, mut room) = ([0.0; 8], [f32::INFINITY; 8]);
-            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None, 0.0);
+            let field = link_pairs(&robot, &frames, &caps, &mut mu, &mut room, None, 0.0, None);
             for a in 0..8 {
                 for b in a + 1..8 {
                     if !caps.is_checked(a, b) {

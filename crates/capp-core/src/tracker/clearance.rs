@@ -27,9 +27,11 @@
 
 use super::limits::DriveLimits;
 use super::DriveState;
+use crate::avoidance::HalfSpace;
 use crate::kinematics::Frames;
 use crate::math::{max, Vec3};
 use crate::robot::{JointKind, Robot};
+use crate::self_collision::field::{LinkPair, MAX_CLOSE_PAIRS};
 
 /// Most ticks of a stop the test simulates; a stop that has not reached
 /// rest by then is not cleared.
@@ -37,13 +39,16 @@ pub const MAX_STOP_TICKS: usize = 128;
 
 /// Whether the tick to `after` (the drive state at the tick's end) and the
 /// stop from there keep every link within `fraction` of its room
-/// (`distance_sq`, its square, one per link), from the configuration of
-/// `frames`. `excursion` is scratch (one value per joint).
+/// (`distance_sq`, its square, one per link) and every pair of `pairs`
+/// within `fraction` of its gap, from the configuration of `frames`.
+/// `excursion` is scratch (one value per joint).
 #[allow(clippy::too_many_arguments)]
 pub fn stop_is_clear<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
     distance_sq: &[f32],
+    planes: &[Option<HalfSpace>],
+    pairs: &[LinkPair],
     after: &DriveState<N>,
     limits: &[DriveLimits],
     dt: f32,
@@ -56,6 +61,12 @@ pub fn stop_is_clear<const N: usize>(
         .min(distance_sq.len())
         .min(excursion.len());
     let mut first = [0.0f32; N];
+    let mut relative = [0.0f32; MAX_CLOSE_PAIRS];
+    let mut turn = [Vec3::zeros(); N];
+    let mut shift = [Vec3::zeros(); N];
+    // Per link with a plane, the most either end moves toward it over the
+    // ticks.
+    let mut toward = [[0.0f32; 2]; N];
     let mut x = [0.0f32; N];
     let mut largest = [0.0f32; N];
     let mut state = *after;
@@ -69,7 +80,34 @@ pub fn stop_is_clear<const N: usize>(
             *xj += v * dt;
             *big = max(*big, xj.abs());
         }
-        first_order(robot, frames, &x[..n], &mut first[..n]);
+        first_order(
+            robot,
+            frames,
+            &x[..n],
+            &mut first[..n],
+            &mut turn,
+            &mut shift,
+        );
+        for (j, (plane, t)) in planes.iter().zip(toward.iter_mut()).enumerate().take(n) {
+            if let (Some(h), Some(w), Some(b)) = (plane, turn.get(j), shift.get(j)) {
+                let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
+                for (t, p) in t.iter_mut().zip([frames.pivot(j), frames.link_end(j)]) {
+                    *t = max(*t, -normal.dot(&(w.cross(&p) + b)));
+                }
+            }
+        }
+        for (pair, rel) in pairs.iter().zip(relative.iter_mut()) {
+            let [a, b] = pair.links;
+            let (a, b) = (a as usize, b as usize);
+            if let (Some(wa), Some(wb), Some(ba), Some(bb)) =
+                (turn.get(a), turn.get(b), shift.get(a), shift.get(b))
+            {
+                let (w, v) = (wb - wa, bb - ba);
+                let at = |p: Vec3| (w.cross(&p) + v).norm_squared();
+                let worst = max(at(frames.pivot(b)), at(frames.link_end(b)));
+                *rel = max(*rel, libm::sqrtf(worst));
+            }
+        }
         if state.is_at_rest(limits, 0.0) {
             break;
         }
@@ -85,6 +123,7 @@ pub fn stop_is_clear<const N: usize>(
     let mut phi = 0.0f32;
     let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
     let mut pivot_chain = 0.0f32;
+    let mut pivot_index = 0usize;
     for ((joint, link), ((&size, &f), &d_sq)) in robot
         .joints()
         .iter()
@@ -103,25 +142,86 @@ pub fn stop_is_clear<const N: usize>(
         pivot_chain = link.chain;
         let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let travel = f + second;
+        let k = pivot_index;
+        pivot_index += 1;
+        let sliding_ok = planes.get(k).copied().flatten().and_then(|h| {
+            let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
+            let rooms = [frames.pivot(k), frames.link_end(k)].map(|p| normal.dot(&p) - h.offset);
+            if !rooms.iter().all(|&r| r > 0.0) {
+                return None;
+            }
+            let toward = toward.get(k).copied().unwrap_or([f32::INFINITY; 2]);
+            let toward_ok = toward
+                .iter()
+                .zip(rooms)
+                .all(|(&t, room)| t + second <= fraction * room);
+            Some(toward_ok && travel * travel <= fraction_sq * h.others_sq)
+        });
         // Not `<=` on a NaN: a bad value is never clear.
-        if !(travel * travel <= fraction_sq * d_sq) {
+        let ok = sliding_ok.unwrap_or(travel * travel <= fraction_sq * d_sq);
+        if !ok {
             return false;
         }
     }
-    true
+    pairs.iter().zip(&relative).all(|(pair, &rel)| {
+        rel + between(robot, &largest[..n], pair.links) <= fraction * max(pair.gap, 0.0)
+    })
+}
+
+/// The second-order bound `Q` of link `b`'s travel when only the joints
+/// `a + 1 ..= b` move, each by at most `excursion` (step_size's sums from
+/// joint `a + 1` on).
+fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) -> f32 {
+    let (a, b) = (links[0] as usize, links[1] as usize);
+    let mut phi = 0.0f32;
+    let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
+    let mut pivot_chain = 0.0f32;
+    let mut second = 0.0f32;
+    for (m, ((joint, link), &size)) in robot
+        .joints()
+        .iter()
+        .zip(robot.links())
+        .zip(excursion)
+        .enumerate()
+        .take(b + 1)
+    {
+        if m > a {
+            match joint.kind {
+                JointKind::Revolute => {
+                    let w = size * (2.0 * phi + size);
+                    lever_sum += w;
+                    lever_base += w * pivot_chain;
+                    phi += size;
+                }
+                JointKind::Prismatic => sliding += size * phi,
+            }
+        }
+        pivot_chain = link.chain;
+        second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
+    }
+    second
 }
 
 /// Per link, `first[k] = max(first[k], |J x|)` at the link's two ends: the
-/// velocity field of the displacement `x` (`v(p) = w x p + b`), one pass.
-fn first_order<const N: usize>(robot: &Robot<N>, frames: &Frames<N>, x: &[f32], first: &mut [f32]) {
+/// velocity field of the displacement `x` (`v(p) = w x p + b`), one pass;
+/// its prefix sums up to each joint into `turn` (`w`) and `shift` (`b`).
+fn first_order<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    x: &[f32],
+    first: &mut [f32],
+    turn: &mut [Vec3; N],
+    shift: &mut [Vec3; N],
+) {
     let mut w = Vec3::zeros();
     let mut b = Vec3::zeros();
     let mut start_sq = 0.0f32;
-    for (j, ((joint, &step), out)) in robot
+    for (j, (((joint, &step), out), (tw, sb))) in robot
         .joints()
         .iter()
         .zip(x)
         .zip(first.iter_mut())
+        .zip(turn.iter_mut().zip(shift.iter_mut()))
         .enumerate()
     {
         let z = frames.axis(j);
@@ -132,6 +232,7 @@ fn first_order<const N: usize>(robot: &Robot<N>, frames: &Frames<N>, x: &[f32], 
             }
             JointKind::Prismatic => b += z * step,
         }
+        (*tw, *sb) = (w, b);
         let end_sq = (w.cross(&frames.link_end(j)) + b).norm_squared();
         let worst = libm::sqrtf(max(start_sq, end_sq));
         *out = max(*out, worst);

@@ -309,3 +309,185 @@ fn from_the_braking_speed_the_stop_fits_in_the_room() {
         );
     }
 }
+
+/// The tick and stop of `after` from `q`: the joint displacements at every
+/// tick, and three points between each two (the joints move on straight
+/// segments between ticks).
+fn stop_samples<const N: usize>(
+    after: &DriveState<N>,
+    limits: &[DriveLimits],
+    dt: f32,
+) -> Vec<Vec<f32>> {
+    let n = after.velocity().len();
+    let mut x = vec![0.0f32; n];
+    let mut out = vec![];
+    let mut state = *after;
+    loop {
+        let before = x.clone();
+        for (xj, &v) in x.iter_mut().zip(state.velocity()) {
+            *xj += v * dt;
+        }
+        for s in [0.25f32, 0.5, 0.75, 1.0] {
+            out.push(
+                before
+                    .iter()
+                    .zip(&x)
+                    .map(|(a, b)| a + (b - a) * s)
+                    .collect(),
+            );
+        }
+        if state.is_at_rest(limits, 0.0) || out.len() > 4 * 200 {
+            return out;
+        }
+        state = state.braking(limits, dt);
+    }
+}
+
+/// A random revolute chain of `n` links (metres, radians).
+fn random_chain(rng: &mut Rng, n: usize) -> Vec<crate::Joint> {
+    (0..n)
+        .map(|_| {
+            crate::Joint::revolute(
+                rng.uniform() * 3.1,
+                range(rng, 0.0, 0.6),
+                range(rng, 0.0, 0.4),
+                -3.0,
+                3.0,
+                range(rng, 0.3, 2.0),
+            )
+        })
+        .collect()
+}
+
+/// Soundness of [`stop_is_clear`]: for each link alone given a room just
+/// under how far its points really go during the tick and the stop (forward
+/// kinematics at every tick and between ticks), the test must refuse; and
+/// the same for a pair's gap under how far the later link moves when only
+/// the joints between the two move. A bound below the truth on any link or
+/// pair fails here.
+#[test]
+fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
+    use super::clearance::stop_is_clear;
+    use crate::kinematics::{forward_kinematics, Frames};
+    use crate::self_collision::field::LinkPair;
+    const N: usize = 8;
+    let mut rng = Rng::seeded(17, &[]);
+    let (mut refused, mut pairs_refused) = (0, 0);
+    for _ in 0..150 {
+        let n = 3 + (range(&mut rng, 0.0, 5.0) as usize);
+        let joints = random_chain(&mut rng, n);
+        let robot = crate::Robot::<N>::new(&joints).unwrap();
+        let limits: Vec<DriveLimits> = joints
+            .iter()
+            .map(|j| DriveLimits::from_rate(j.max_rate))
+            .collect();
+        let q: Vec<f32> = (0..n).map(|_| rng.uniform() * 2.0).collect();
+        let dt = 0.05;
+        let mut after = DriveState::<N>::at_rest(n);
+        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
+        for _ in 0..(1 + range(&mut rng, 0.0, 15.0) as usize) {
+            after = after.toward(&limits, dt, &target);
+        }
+        let mut frames = Frames::<N>::default();
+        forward_kinematics(&robot, &q, &mut frames);
+        let points = |f: &Frames<N>, k: usize| {
+            [
+                f.pivot(k),
+                (f.pivot(k) + f.link_end(k)) * 0.5,
+                f.link_end(k),
+            ]
+        };
+        // How far each link's points go, and link b under joints a+1..=b alone.
+        let samples = stop_samples(&after, &limits, dt);
+        let mut travel = vec![0.0f32; n];
+        let (a, b) = (0usize, n - 1);
+        let mut relative = 0.0f32;
+        let mut moved = Frames::<N>::default();
+        for x in &samples {
+            let qx: Vec<f32> = q.iter().zip(x).map(|(q, x)| q + x).collect();
+            forward_kinematics(&robot, &qx, &mut moved);
+            for (k, t) in travel.iter_mut().enumerate() {
+                for (p0, p1) in points(&frames, k).iter().zip(points(&moved, k)) {
+                    *t = t.max((p1 - p0).norm());
+                }
+            }
+            let partial: Vec<f32> = q
+                .iter()
+                .zip(x)
+                .enumerate()
+                .map(|(m, (q, x))| if m > a { q + x } else { *q })
+                .collect();
+            forward_kinematics(&robot, &partial, &mut moved);
+            for (p0, p1) in points(&frames, b).iter().zip(points(&moved, b)) {
+                relative = relative.max((p1 - p0).norm());
+            }
+        }
+        let mut scratch = [0.0f32; N];
+        let roomy = [f32::INFINITY; N];
+        assert!(stop_is_clear(
+            &robot,
+            &frames,
+            &roomy[..n],
+            &[None; N][..n],
+            &[],
+            &after,
+            &limits,
+            dt,
+            1.0,
+            &mut scratch[..n]
+        ));
+        for k in 0..n {
+            if travel[k] < 1e-4 {
+                continue;
+            }
+            let mut rooms = [f32::INFINITY; N];
+            rooms[k] = (0.99 * travel[k]).powi(2);
+            assert!(
+                !stop_is_clear(
+                    &robot,
+                    &frames,
+                    &rooms[..n],
+                    &[None; N][..n],
+                    &[],
+                    &after,
+                    &limits,
+                    dt,
+                    1.0,
+                    &mut scratch[..n]
+                ),
+                "link {k} goes {} but was cleared with room {}",
+                travel[k],
+                0.99 * travel[k]
+            );
+            refused += 1;
+        }
+        if relative > 1e-4 {
+            let pair = LinkPair {
+                clearance: 1.0,
+                gap: 0.99 * relative,
+                links: [a as u8, b as u8],
+            };
+            assert!(
+                !stop_is_clear(
+                    &robot,
+                    &frames,
+                    &roomy[..n],
+                    &[None; N][..n],
+                    &[pair],
+                    &after,
+                    &limits,
+                    dt,
+                    1.0,
+                    &mut scratch[..n]
+                ),
+                "link {b} moves {relative} against link {a} but was cleared with gap {}",
+                0.99 * relative
+            );
+            pairs_refused += 1;
+        }
+    }
+    assert!(
+        refused > 200 && pairs_refused > 50,
+        "{refused} links, {pairs_refused} pairs tested"
+    );
+}
