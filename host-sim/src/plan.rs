@@ -100,7 +100,7 @@ fn drive(
     let (Some(previous), h) = (previous, report.time_step_s) else {
         return (vec![0.0; n], vec![0.0; n]);
     };
-    if !(h > 0.0) {
+    if h.is_nan() || h <= 0.0 {
         return (vec![0.0; n], vec![0.0; n]);
     }
     let velocity = planner.rates().to_vec();
