@@ -460,7 +460,7 @@ fn viewer_shows_each_joints_velocity_and_acceleration() {
     let names = ["shoulder", "elbow", "wrist"];
     let mut over = 0;
     for (kind, list) in [("velocity", &velocity), ("acceleration", &acceleration)] {
-        for j in 0..n {
+        for (j, name) in names.iter().enumerate() {
             let x = at(list, frame, j);
             let bar = tag(&dom, &format!("drive-{kind}-{}", j + 1));
             let shown: f64 = attribute(bar, "data-value")
@@ -481,10 +481,7 @@ fn viewer_shows_each_joints_velocity_and_acceleration() {
             let red = attribute(bar, "class").unwrap().contains("over");
             assert_eq!(red, x.abs() > 1.001, "{bar}");
             over += red as usize;
-            assert!(
-                attribute(bar, "title").unwrap().starts_with(names[j]),
-                "{bar}"
-            );
+            assert!(attribute(bar, "title").unwrap().starts_with(name), "{bar}");
         }
         let label = match kind {
             "velocity" => "largest |velocity| / rate limit",
