@@ -372,8 +372,7 @@ fn plots_show_velocity_and_acceleration_against_their_limits() {
     assert_eq!(largest.len(), 2, "{largest:?}");
     for (text, (value, step, joint)) in largest.iter().zip([v, a]) {
         let want = format!(
-            "largest: {} at step {step}, joint {} ({})",
-            render::format_value(value),
+            "largest: {value:.3} at step {step}, joint {} ({})",
             joint + 1,
             problem.joint_names[joint]
         );

@@ -185,12 +185,7 @@ fn drive_panel(
             color: [30, 30, 30],
         });
         items.push((
-            format!(
-                "largest: {} at step {}, {}",
-                super::format_value(pv),
-                t.rows[pk].step,
-                name(pj)
-            ),
+            format!("largest: {pv:.3} at step {}, {}", t.rows[pk].step, name(pj)),
             [30, 30, 30],
             Marker::Dot,
         ));
