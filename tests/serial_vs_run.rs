@@ -59,10 +59,16 @@ fn serial_matches_run(file: &str, elf: &Path) -> usize {
     // Per-step details a setpoint frame does not carry (the board reports
     // its escape in `Status`, not per setpoint).
     let not_sent = ["h_s", "constrained", "halvings", "escape"];
+    // The joints' velocities and accelerations (`v1..vn`, `a1..an`): not
+    // in the setpoint stream yet (issue 22, item 5: the protocol's side).
+    let joint_rate = |c: &str| {
+        c.strip_prefix(['v', 'a'])
+            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+    };
     assert_eq!(received.len(), expected.len(), "same number of setpoints");
     for (row, (e, r)) in expected.iter().zip(&received).enumerate().skip(1) {
         for (column, (a, b)) in header.iter().zip(e.iter().zip(r)) {
-            if !not_sent.contains(&column.as_str()) {
+            if !not_sent.contains(&column.as_str()) && !joint_rate(column) {
                 assert_eq!(a, b, "setpoint row {row}, column {column}");
             }
         }

@@ -252,6 +252,67 @@
       return p === null ? '—' : p[0] + ' – ' + p[1] + ': ' + fmt(p[2], 4);
     }]);
   }
+  // What the drives are asked for: per joint |velocity| / rate limit and
+  // |acceleration| / acceleration limit as bars (the bar chart's top is
+  // 1.25, the limit a dashed line at 1), the largest of each in the table.
+  const drive = RUN.velocity_fraction !== null && RUN.acceleration_fraction !== null;
+  const TOP = 1.25;
+  // Over the limit by more than the 4-decimal rounding of the data.
+  const OVER = 1.001;
+  const bars = [];
+  const J_DRIVE = RUN.joint_names.length;
+  // The joint with the largest |fraction| at frame f (the first, at a tie).
+  function largest(list, f) {
+    let best = 0;
+    for (let j = 1; j < J_DRIVE; j++) {
+      if (Math.abs(list[f * J_DRIVE + j]) > Math.abs(list[f * J_DRIVE + best])) best = j;
+    }
+    return best;
+  }
+  if (drive) {
+    for (let j = 0; j < J_DRIVE; j++) {
+      const group = document.createElement('div');
+      group.className = 'joint';
+      const pair = ['velocity', 'acceleration'].map((kind) => {
+        const bar = document.createElement('div');
+        bar.className = 'bar ' + kind;
+        bar.id = 'drive-' + kind + '-' + (j + 1);
+        group.append(bar);
+        return bar;
+      });
+      $('drive-bars').append(group);
+      bars.push(pair);
+      const label = document.createElement('span');
+      label.textContent = j + 1;
+      label.title = RUN.joint_names[j];
+      $('drive-joints').append(label);
+    }
+    fields.push(['largest |velocity| / rate limit', (f) => {
+      const j = largest(RUN.velocity_fraction, f);
+      return fmt(Math.abs(RUN.velocity_fraction[f * J_DRIVE + j]), 3) + ' (' + RUN.joint_names[j] + ')';
+    }]);
+    fields.push(['largest |acceleration| / its limit', (f) => {
+      const j = largest(RUN.acceleration_fraction, f);
+      return fmt(Math.abs(RUN.acceleration_fraction[f * J_DRIVE + j]), 3) + ' (' + RUN.joint_names[j] + ')';
+    }]);
+  } else {
+    $('drive-bars').style.display = 'none';
+    $('drive-none').textContent = 'velocities and accelerations not recorded in this trajectory (written before they were)';
+  }
+  function showDrive(f) {
+    if (!drive) return;
+    const names = { velocity: 'rate limit', acceleration: 'acceleration limit' };
+    bars.forEach((pair, j) => {
+      [RUN.velocity_fraction, RUN.acceleration_fraction].forEach((list, i) => {
+        const x = list[f * J_DRIVE + j], bar = pair[i];
+        const kind = i === 0 ? 'velocity' : 'acceleration';
+        bar.dataset.value = x;
+        bar.style.height = (100 * Math.min(Math.abs(x), TOP) / TOP) + '%';
+        bar.classList.toggle('over', Math.abs(x) > OVER);
+        bar.title = RUN.joint_names[j] + ': ' + kind + ' ' + fmt(x, 3) + ' of its ' + names[kind];
+      });
+    });
+  }
   function fmt(x, digits) {
     if (x === null || x === undefined) return '—';
     const m = Math.abs(x);
@@ -272,6 +333,7 @@
     pose(f);
     seek.value = f;
     fields.forEach(([, value], i) => { values[i].textContent = value(f); });
+    showDrive(f);
     const now = RUN.escape[f];
     $('escape-text').textContent = 'escape: ' + (now === null ? 'none (the law drives)' : now);
     const kind = now === null ? null : now.split(' ')[0];

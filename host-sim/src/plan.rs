@@ -3,13 +3,22 @@
 //! Row 0 is the start configuration; row `k` the configuration after step `k`.
 //! The setpoint decimation is the core's own ([`capp_core::setpoint::Decimator`]),
 //! so the host and the firmware pick the same setpoints.
+//!
+//! Each row carries every joint's velocity and acceleration, what a drive
+//! takes as feed-forward with the position. With `motion = "tracked"` they
+//! are the tracker's state after the tick ([`capp_core::Planner::drive`]),
+//! which equals the backward differences of the positions over the control
+//! period (rest before row 0). With stepped motion the velocity is the rate
+//! of the step that led to the row ([`capp_core::Planner::rates`]; 0 for a
+//! step not taken, `h = 0`) and the acceleration its change over the row's
+//! `h` (0 when `h` is 0, and at row 0).
 
 use std::time::{Duration, Instant};
 
 use capp_core::avoidance::Clearance;
 use capp_core::escape::EscapeState;
 use capp_core::setpoint::Decimator;
-use capp_core::{Outcome, Phase, StepReport};
+use capp_core::{Motion, Outcome, Phase, StepReport};
 
 use crate::problem::{CorePlanner, CoreScenario, LoadError, Problem};
 
@@ -22,6 +31,11 @@ pub struct Row {
     pub h: f32,
     /// Joint values (radians or length units).
     pub q: Vec<f32>,
+    /// Joint velocities, per second (module docs: the tracker's, or the
+    /// step's rate).
+    pub velocity: Vec<f32>,
+    /// Joint accelerations, per second squared (module docs).
+    pub acceleration: Vec<f32>,
     /// End-effector position.
     pub position: [f32; 3],
     /// End-effector orientation, rows of the rotation matrix.
@@ -70,7 +84,41 @@ impl RunResult {
     }
 }
 
-fn row(planner: &CorePlanner, report: &StepReport, waypoints: usize, setpoint: bool) -> Row {
+/// Every joint's velocity and acceleration after `report`'s step, the
+/// step before it having left `previous` (`None` at row 0; module docs).
+fn drive(
+    planner: &CorePlanner,
+    report: &StepReport,
+    motion: Motion,
+    previous: Option<&[f32]>,
+) -> (Vec<f32>, Vec<f32>) {
+    let n = planner.joints().len();
+    if motion == Motion::Tracked {
+        let d = planner.drive();
+        return (d.velocity().to_vec(), d.acceleration().to_vec());
+    }
+    let (Some(previous), h) = (previous, report.time_step_s) else {
+        return (vec![0.0; n], vec![0.0; n]);
+    };
+    if h.is_nan() || h <= 0.0 {
+        return (vec![0.0; n], vec![0.0; n]);
+    }
+    let velocity = planner.rates().to_vec();
+    let acceleration = velocity
+        .iter()
+        .zip(previous)
+        .map(|(v, v0)| (v - v0) / h)
+        .collect();
+    (velocity, acceleration)
+}
+
+fn row(
+    planner: &CorePlanner,
+    report: &StepReport,
+    waypoints: usize,
+    setpoint: bool,
+    (velocity, acceleration): (Vec<f32>, Vec<f32>),
+) -> Row {
     let frames = planner.frames();
     let p = frames.end_position();
     let r = frames.end_rotation();
@@ -78,6 +126,8 @@ fn row(planner: &CorePlanner, report: &StepReport, waypoints: usize, setpoint: b
         step: report.step,
         h: report.time_step_s,
         q: planner.joints().to_vec(),
+        velocity,
+        acceleration,
         position: [p.x, p.y, p.z],
         rotation: [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
         v: report.v,
@@ -107,12 +157,22 @@ pub fn run(
         .map_err(|e| LoadError::new(&problem.source, problem.lines.start, e.to_string()))?;
     let mut decimator = Decimator::new(problem.setpoints);
     let waypoints = problem.waypoints.len();
+    let motion = scenario.settings().motion;
     let first = *planner.last_report();
-    let mut rows = vec![row(&planner, &first, waypoints, decimator.offer(&first))];
+    let at_start = drive(&planner, &first, motion, None);
+    let mut rows = vec![row(
+        &planner,
+        &first,
+        waypoints,
+        decimator.offer(&first),
+        at_start,
+    )];
     let outcome = planner
         .run(scenario, |planner, report| {
             let setpoint = decimator.offer(report);
-            rows.push(row(planner, report, waypoints, setpoint));
+            let previous = rows.last().map(|r: &Row| r.velocity.as_slice());
+            let state = drive(planner, report, motion, previous);
+            rows.push(row(planner, report, waypoints, setpoint, state));
             progress(report);
         })
         .map_err(|e| LoadError::new(&problem.source, None, format!("planner: {e}")))?;

@@ -320,6 +320,8 @@ fn derived_row(scenario: &CoreScenario, s: &capp_link::Setpoint, h: f32) -> Row 
         step: s.step,
         h,
         q: s.joints.clone(),
+        velocity: vec![0.0; s.joints.len()],
+        acceleration: vec![0.0; s.joints.len()],
         position: [p.x, p.y, p.z],
         rotation: [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
         v: error.v,

@@ -1,8 +1,9 @@
 //! Reading a trajectory CSV (as [`crate::output`] writes it) back.
 //!
-//! Required columns: `h_s` and `q1..qn`. `step`, `x y z`, `v`,
-//! `position_error`, `orientation_error`, `clearance` and `escape` are read
-//! when present.
+//! Required columns: `h_s` and `q1..qn`. `step`, `v1..vn` and `a1..an`
+//! (the joints' velocities and accelerations; files written before they
+//! were have none), `x y z`, `v`, `position_error`, `orientation_error`,
+//! `clearance` and `escape` are read when present.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -20,6 +21,13 @@ pub struct TrajectoryRow {
     pub h: f64,
     /// Joint values.
     pub q: Vec<f64>,
+    /// Recorded joint velocities (per second), one per joint, if present
+    /// (`v1..vn`; not in files written before them, empty cells in a row
+    /// whose velocities were not known).
+    pub velocity: Option<Vec<f64>>,
+    /// Recorded joint accelerations (per second squared), as `velocity`
+    /// (`a1..an`).
+    pub acceleration: Option<Vec<f64>>,
     /// Recorded end-effector position, if present.
     pub position: Option<[f64; 3]>,
     /// Recorded `V`, if present.
@@ -67,6 +75,8 @@ impl Trajectory {
                     step: r.step as u64,
                     h: r.h as f64,
                     q: r.q.iter().map(|&x| x as f64).collect(),
+                    velocity: widen(&r.velocity, r.q.len()),
+                    acceleration: widen(&r.acceleration, r.q.len()),
                     position: Some(r.position.map(f64::from)),
                     v: Some(r.v as f64),
                     position_error: Some(r.position_error as f64),
@@ -77,6 +87,11 @@ impl Trajectory {
                 .collect(),
         }
     }
+}
+
+/// `values` widened, when there is one per joint.
+fn widen(values: &[f32], joints: usize) -> Option<Vec<f64>> {
+    (values.len() == joints).then(|| values.iter().map(|&x| x as f64).collect())
 }
 
 /// Reads a trajectory CSV.
@@ -114,6 +129,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
         .map(|j| index[format!("q{j}").as_str()])
         .collect();
     let col = |name: &str| index.get(name).copied();
+    // `v1..vn`, `a1..an`: all of a kind, or none of it.
+    let per_joint = |prefix: &str| -> Option<Vec<usize>> {
+        (1..=joints)
+            .map(|j| col(format!("{prefix}{j}").as_str()))
+            .collect()
+    };
+    let (velocity_cols, acceleration_cols) = (per_joint("v"), per_joint("a"));
     let (step_col, x_col, y_col, z_col) = (col("step"), col("x"), col("y"), col("z"));
     let escape_col = col("escape");
     let (v_col, pe_col, oe_col, c_col) = (
@@ -149,6 +171,38 @@ pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
             .enumerate()
             .map(|(j, &c)| number(c, &format!("q{}", j + 1)))
             .collect::<Result<Vec<_>, _>>()?;
+        // A row's velocities (or accelerations): every cell a number, or
+        // every cell empty (not known).
+        let joint_values =
+            |cols: &Option<Vec<usize>>, prefix: &str| -> Result<Option<Vec<f64>>, LoadError> {
+                let Some(cols) = cols else {
+                    return Ok(None);
+                };
+                let values = cols
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &c)| optional(Some(c), &format!("{prefix}{}", j + 1)))
+                    .collect::<Result<Vec<_>, _>>()?;
+                if values.iter().all(Option::is_none) {
+                    return Ok(None);
+                }
+                values
+                    .iter()
+                    .enumerate()
+                    .map(|(j, v)| {
+                        v.ok_or_else(|| {
+                            LoadError::new(
+                                path,
+                                Some(line),
+                                format!("column `{prefix}{}` is empty, others are not", j + 1),
+                            )
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+                    .map(Some)
+            };
+        let velocity = joint_values(&velocity_cols, "v")?;
+        let acceleration = joint_values(&acceleration_cols, "a")?;
         let position = match (x_col, y_col, z_col) {
             (Some(x), Some(y), Some(z)) => {
                 Some([number(x, "x")?, number(y, "y")?, number(z, "z")?])
@@ -168,6 +222,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Trajectory, LoadError> {
             },
             h: number(h_col, "h_s")?,
             q,
+            velocity,
+            acceleration,
             position,
             v: optional(v_col, "v")?,
             position_error: optional(pe_col, "position_error")?,

@@ -119,9 +119,10 @@ fn a_detour_and_a_walk_show_in_the_summary_and_every_picture() {
         };
         assert!(arm.contains(legend), "{name}");
 
-        // plots.svg: a band per panel and the legend's swatch.
+        // plots.svg: a band per panel (five: V, errors, clearance, velocity,
+        // acceleration) and the legend's swatch.
         let plots = std::fs::read_to_string(out.join("plots.svg")).unwrap();
-        assert_eq!(fills(&plots, band_color(&stretches[0])), 3 + 1, "{name}");
+        assert_eq!(fills(&plots, band_color(&stretches[0])), 5 + 1, "{name}");
         assert!(plots.contains(" (shaded)</text>"), "{name}");
 
         // viewer.html: the states per frame and the stretch with its colour.

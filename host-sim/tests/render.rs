@@ -294,3 +294,137 @@ fn the_arm_png_draws_the_payload_where_it_projects() {
     let above = [c[0] - a[0] * 2.0 / 3.0, c[1], c[2] + 2.0 * a[2]];
     assert_eq!(pixel(above), [255; 3], "the page at {above:?}");
 }
+
+/// `planar_arm.toml` with `motion = "tracked"`, planned, as its
+/// trajectory file reads back.
+fn tracked_planar() -> (Problem, Trajectory) {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml"),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("planar_tracked.toml");
+    std::fs::write(&file, format!("{text}\nmotion = \"tracked\"\n")).unwrap();
+    let problem = Problem::load(&file).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
+    (problem, t)
+}
+
+/// The texts of a canvas.
+fn texts(c: &Canvas) -> Vec<&str> {
+    c.shapes
+        .iter()
+        .filter_map(|s| match s {
+            Shape::Text { text, .. } => Some(text.as_str()),
+            _ => None,
+        })
+        .collect()
+}
+
+/// `plots.png`'s drive panels: each joint's velocity over its rate limit
+/// and acceleration over its acceleration limit, the limits `±1` dashed,
+/// the largest `|fraction|` named and marked where the data puts it
+/// between the `±1` lines; a note instead for a trajectory written before
+/// the columns.
+#[test]
+fn plots_show_velocity_and_acceleration_against_their_limits() {
+    let (problem, t) = tracked_planar();
+    let canvas = plots::plots(&problem, &t);
+    let all = texts(&canvas);
+    for label in [
+        "velocity / rate limit [1]",
+        "acceleration / acceleration limit [1]",
+        "its rate limit, ±1",
+        "its acceleration limit, ±1",
+        "joint 3 (wrist)",
+        "step (tracked: t = step × 0.05 s)",
+    ] {
+        assert!(all.contains(&label), "no {label:?} in {all:?}");
+    }
+    // The largest fractions, from the rows and the limits.
+    let peak = |value: fn(&trajectory::TrajectoryRow) -> &Vec<f64>,
+                limit: &dyn Fn(usize) -> f64| {
+        // The first row, then the first joint, at the largest.
+        let mut best = (0.0f64, 0u64, 0usize);
+        for r in &t.rows {
+            for (j, v) in value(r).iter().enumerate() {
+                if (v / limit(j)).abs() > best.0.abs() {
+                    best = (v / limit(j), r.step, j);
+                }
+            }
+        }
+        best
+    };
+    let drive = &problem.drive.joints;
+    let v = peak(|r| r.velocity.as_ref().unwrap(), &|j| drive[j].max_rate);
+    let a = peak(|r| r.acceleration.as_ref().unwrap(), &|j| {
+        drive[j].max_accel
+    });
+    assert!(v.0.abs() > 0.5 && a.0.abs() > 0.9, "{v:?} {a:?}");
+    let largest: Vec<&str> = all
+        .iter()
+        .copied()
+        .filter(|s| s.starts_with("largest: "))
+        .collect();
+    assert_eq!(largest.len(), 2, "{largest:?}");
+    for (text, (value, step, joint)) in largest.iter().zip([v, a]) {
+        let want = format!(
+            "largest: {value:.3} at step {step}, joint {} ({})",
+            joint + 1,
+            problem.joint_names[joint]
+        );
+        assert_eq!(*text, want);
+    }
+    // Each panel: its two dashed limit lines (at +1 above -1) and the
+    // peak's dot, where the fraction puts it between them.
+    let limit_lines: Vec<f64> = canvas
+        .shapes
+        .iter()
+        .filter_map(|s| match s {
+            Shape::Line {
+                points,
+                color,
+                dashed: true,
+                ..
+            // Across the panel (not the legend's 18 px sample).
+            } if *color == plots::LIMIT && points[1].0 - points[0].0 > 100.0 => Some(points[0].1),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(limit_lines.len(), 4, "{limit_lines:?}");
+    let dots: Vec<f64> = canvas
+        .shapes
+        .iter()
+        .filter_map(|s| match s {
+            // The marks (the legend's samples are 4 px).
+            Shape::Disc { centre, radius, .. } if *radius < 4.0 => Some(centre.1),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(dots.len(), 2);
+    for (panel, value) in [v.0, a.0].into_iter().enumerate() {
+        let (minus, plus) = (limit_lines[2 * panel], limit_lines[2 * panel + 1]);
+        assert!(plus < minus, "+1 above -1");
+        let y = plus + (1.0 - value) / 2.0 * (minus - plus);
+        assert!(
+            (dots[panel] - y).abs() < 0.01,
+            "dot at {}, {value} is at {y}",
+            dots[panel]
+        );
+    }
+
+    // A trajectory from before the columns: the panels say so.
+    let mut old = t.clone();
+    for r in &mut old.rows {
+        r.velocity = None;
+        r.acceleration = None;
+    }
+    let canvas = plots::plots(&problem, &old);
+    let all = texts(&canvas);
+    let note = "not recorded: the trajectory has no such columns (written before them)";
+    assert_eq!(all.iter().filter(|s| **s == note).count(), 2);
+    assert!(!all.iter().any(|s| s.starts_with("largest: ")));
+}

@@ -394,6 +394,8 @@ fn swing(problem: &Problem, turn: f64, rows: usize) -> Trajectory {
                     step: k as u64,
                     h: if k == 0 { 0.0 } else { 0.05 },
                     q,
+                    velocity: None,
+                    acceleration: None,
                     position: None,
                     v: None,
                     position_error: None,

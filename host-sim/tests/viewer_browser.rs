@@ -330,3 +330,212 @@ fn viewer_shows_and_hides_the_link_capsules() {
     eprintln!("{changed} pixels change when the capsules are shown");
     assert!(changed > 2000, "{changed} pixels changed");
 }
+
+/// A JSON list of numbers (or `null`s) named `key` in the page's `RUN`.
+fn run_list(html: &str, key: &str) -> Option<Vec<Option<f64>>> {
+    let rest = html.split(&format!("\n\"{key}\": ")).nth(1)?;
+    if rest.starts_with("null") {
+        return None;
+    }
+    let body = rest.strip_prefix('[')?.split(']').next()?;
+    Some(
+        body.split(',')
+            .map(|s| match s.trim() {
+                "null" => None,
+                s => Some(s.parse().unwrap_or_else(|_| panic!("{key}: {s}"))),
+            })
+            .collect(),
+    )
+}
+
+/// The opening tag of the element with `id` in a dumped DOM.
+fn tag<'a>(dom: &'a str, id: &str) -> &'a str {
+    let at = dom
+        .find(&format!("id=\"{id}\""))
+        .unwrap_or_else(|| panic!("no #{id} in the page"));
+    let start = dom[..at].rfind('<').unwrap();
+    let end = at + dom[at..].find('>').unwrap();
+    &dom[start..=end]
+}
+
+/// An attribute's value in a tag.
+fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let rest = tag.split(&format!(" {name}=\"")).nth(1)?;
+    rest.split('"').next()
+}
+
+/// The text of the table cell after the one reading `label`.
+fn cell_after<'a>(dom: &'a str, label: &str) -> &'a str {
+    let rest = dom
+        .split(&format!("<td>{label}</td>"))
+        .nth(1)
+        .unwrap_or_else(|| panic!("no row {label:?}"));
+    let rest = &rest[rest.find('>').unwrap() + 1..];
+    rest.split("</td>").next().unwrap()
+}
+
+/// The drive panel: per frame, each joint's velocity and acceleration as
+/// fractions of their limits. The page's data (`velocity_fraction`,
+/// `acceleration_fraction`) against the trajectory and the limits; then
+/// the page, opened at the frame with the largest acceleration, against its
+/// data: every bar's value and height, the red of a bar over its limit, the
+/// largest of each named in the table; at rest the bars are empty. A
+/// trajectory written before the columns gets a note, not bars.
+#[test]
+fn viewer_shows_each_joints_velocity_and_acceleration() {
+    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
+    let Some(exe) = chromium() else {
+        assert!(
+            !required,
+            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
+        );
+        eprintln!("SKIPPED viewer_shows_each_joints_velocity_and_acceleration: no Chromium found");
+        return;
+    };
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml"),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("planar_tracked.toml");
+    std::fs::write(&file, format!("{text}\nmotion = \"tracked\"\n")).unwrap();
+    let problem = Problem::load(&file).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
+    let html = viewer(&problem, &t);
+    let page = dir.path().join("viewer.html");
+    std::fs::write(&page, &html).unwrap();
+
+    // The data against the trajectory and the limits.
+    let n = problem.joints.len();
+    let steps = run_list(&html, "step").unwrap();
+    let velocity = run_list(&html, "velocity_fraction").expect("velocity_fraction");
+    let acceleration = run_list(&html, "acceleration_fraction").expect("acceleration_fraction");
+    assert_eq!(velocity.len(), steps.len() * n);
+    assert_eq!(acceleration.len(), steps.len() * n);
+    assert!(html.contains("\n\"joint_names\": [\"shoulder\",\"elbow\",\"wrist\"],\n"));
+    let limits = &problem.drive.joints;
+    for (f, step) in steps.iter().enumerate() {
+        let row = t
+            .rows
+            .iter()
+            .find(|r| Some(r.step as f64) == *step)
+            .unwrap();
+        for j in 0..n {
+            let want_v = row.velocity.as_ref().unwrap()[j] / limits[j].max_rate;
+            let want_a = row.acceleration.as_ref().unwrap()[j] / limits[j].max_accel;
+            for (got, want) in [
+                (velocity[f * n + j], want_v),
+                (acceleration[f * n + j], want_a),
+            ] {
+                let got = got.unwrap();
+                // The page's 4 decimals (5 significant digits below 1e-3).
+                assert!(
+                    (got - want).abs() <= 6e-5 + 1e-4 * want.abs(),
+                    "frame {f} joint {}: {got} in the page, {want} in the trajectory",
+                    j + 1
+                );
+            }
+        }
+    }
+
+    // The frame with the largest |acceleration| / limit: the page's bars
+    // and table there.
+    let at = |list: &[Option<f64>], f: usize, j: usize| list[f * n + j].unwrap();
+    let frame = (0..steps.len())
+        .max_by(|&a, &b| {
+            let m = |f| {
+                (0..n)
+                    .map(|j| at(&acceleration, f, j).abs())
+                    .fold(0.0, f64::max)
+            };
+            m(a).total_cmp(&m(b))
+        })
+        .unwrap();
+    let url = format!("file://{}#frame={frame}", page.display());
+    let dom = browse_url(&exe, &url, &["--dump-dom".to_string()]).stdout;
+    assert!(dom.contains("<title>ok "), "{dom}");
+    let names = ["shoulder", "elbow", "wrist"];
+    let mut over = 0;
+    for (kind, list) in [("velocity", &velocity), ("acceleration", &acceleration)] {
+        for (j, name) in names.iter().enumerate() {
+            let x = at(list, frame, j);
+            let bar = tag(&dom, &format!("drive-{kind}-{}", j + 1));
+            let shown: f64 = attribute(bar, "data-value")
+                .and_then(|s| s.parse().ok())
+                .unwrap_or_else(|| panic!("no value in {bar}"));
+            assert!((shown - x).abs() <= 1e-12, "{bar}: the data says {x}");
+            let style = attribute(bar, "style").unwrap();
+            let height: f64 = style
+                .trim_start_matches("height: ")
+                .trim_end_matches("%;")
+                .parse()
+                .unwrap_or_else(|_| panic!("{style}"));
+            let want = 100.0 * x.abs().min(1.25) / 1.25;
+            assert!(
+                (height - want).abs() < 1e-6,
+                "{bar}: height {want} % for {x}"
+            );
+            let red = attribute(bar, "class").unwrap().contains("over");
+            assert_eq!(red, x.abs() > 1.001, "{bar}");
+            over += red as usize;
+            assert!(attribute(bar, "title").unwrap().starts_with(name), "{bar}");
+        }
+        let label = match kind {
+            "velocity" => "largest |velocity| / rate limit",
+            _ => "largest |acceleration| / its limit",
+        };
+        let j = (0..n).fold(0, |b, j| {
+            if at(list, frame, j).abs() > at(list, frame, b).abs() {
+                j
+            } else {
+                b
+            }
+        });
+        let want = format!("{:.3} ({})", at(list, frame, j).abs(), names[j]);
+        assert_eq!(cell_after(&dom, label), want, "frame {frame}");
+    }
+    let peak = (0..n)
+        .map(|j| at(&acceleration, frame, j).abs())
+        .fold(0.0, f64::max);
+    eprintln!("frame {frame}: largest |acceleration| / limit {peak}, {over} bars over");
+    assert!(peak > 0.9, "{peak}");
+
+    // At rest (frame 0 of a tracked run): empty bars, zeros in the table.
+    let dom = browse_url(
+        &exe,
+        &format!("file://{}#frame=0", page.display()),
+        &["--dump-dom".to_string()],
+    )
+    .stdout;
+    for kind in ["velocity", "acceleration"] {
+        for j in 1..=n {
+            let bar = tag(&dom, &format!("drive-{kind}-{j}"));
+            assert_eq!(attribute(bar, "style"), Some("height: 0%;"), "{bar}");
+        }
+    }
+    assert_eq!(
+        cell_after(&dom, "largest |velocity| / rate limit"),
+        "0.000 (shoulder)"
+    );
+
+    // A trajectory from before the columns: no data, a note, no bars.
+    let mut old = t.clone();
+    for r in &mut old.rows {
+        r.velocity = None;
+        r.acceleration = None;
+    }
+    let html = viewer(&problem, &old);
+    assert!(html.contains("\n\"velocity_fraction\": null,\n"));
+    std::fs::write(&page, &html).unwrap();
+    let dom = browse(&exe, &page, &["--dump-dom".to_string()]).stdout;
+    assert!(dom.contains("<title>ok "), "{dom}");
+    assert!(
+        dom.contains("velocities and accelerations not recorded in this trajectory"),
+        "{dom}"
+    );
+    assert!(!dom.contains("<div class=\"bar velocity\""));
+    assert!(!dom.contains("<td>largest |velocity| / rate limit</td>"));
+}

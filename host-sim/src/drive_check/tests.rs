@@ -38,6 +38,8 @@ fn rows(count: usize, q1: impl Fn(usize) -> f64) -> Trajectory {
                 step: k as u64,
                 h: if k == 0 { 0.0 } else { DT as f32 as f64 },
                 q: vec![q1(k) as f32 as f64, 0.0],
+                velocity: None,
+                acceleration: None,
                 position: None,
                 v: None,
                 position_error: None,

@@ -2,7 +2,7 @@
 //!
 //! | file | contents |
 //! |---|---|
-//! | `trajectory.csv` | every step: see [`TRAJECTORY_COLUMNS`] and the joint columns `q1..qn` |
+//! | `trajectory.csv` | every step: [`LEAD_COLUMNS`], the joint columns ([`header`]: `q1..qn`, `v1..vn`, `a1..an`), then [`TRAJECTORY_COLUMNS`] |
 //! | `setpoints.csv` | the decimated setpoint stream, same columns |
 //! | `joints.dat` | the setpoints in the listing's layout ([`crate::input::legacy::joints_dat_record`]) |
 //! | `summary.txt` | the summary printed on stdout ([`summary`]) |
@@ -28,7 +28,11 @@ use crate::problem::{Problem, SourceKind};
 
 /// Columns before the joint values.
 pub const LEAD_COLUMNS: [&str; 2] = ["step", "h_s"];
-/// Columns after the joint values.
+/// The joint columns, in order, each `1..=n`: position (radians or length
+/// units), velocity (per second), acceleration (per second squared)
+/// ([`crate::plan::Row`]).
+pub const JOINT_COLUMNS: [&str; 3] = ["q", "v", "a"];
+/// Columns after the joint columns.
 pub const TRAJECTORY_COLUMNS: [&str; 22] = [
     "x",
     "y",
@@ -63,18 +67,25 @@ pub fn escape_label(state: EscapeState) -> String {
     crate::escapes::label(state)
 }
 
-/// The CSV header for `n` joints.
+/// The CSV header for `n` joints: [`LEAD_COLUMNS`], `q1..qn`, `v1..vn`,
+/// `a1..an` ([`JOINT_COLUMNS`]), [`TRAJECTORY_COLUMNS`].
 pub fn header(n: usize) -> Vec<String> {
     LEAD_COLUMNS
         .iter()
         .map(|s| s.to_string())
-        .chain((1..=n).map(|i| format!("q{i}")))
+        .chain(
+            JOINT_COLUMNS
+                .iter()
+                .flat_map(|c| (1..=n).map(move |i| format!("{c}{i}"))),
+        )
         .chain(TRAJECTORY_COLUMNS.iter().map(|s| s.to_string()))
         .collect()
 }
 
 /// Rows as CSV text (full `f32` precision: values read back bit for bit).
-/// Clearance point and obstacle are 1-based; empty when nothing is within
+/// `v1..vn` and `a1..an` are the rows' velocities and accelerations (per
+/// second, per second squared; [`crate::plan`]; empty in a row that has
+/// not one per joint). Clearance point and obstacle are 1-based; empty when nothing is within
 /// influence. `constrained` and `halvings` are empty where not known (a plan
 /// received from a board).
 pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result<String> {
@@ -83,6 +94,14 @@ pub fn rows_csv<'a>(n: usize, rows: impl IntoIterator<Item = &'a Row>) -> Result
     for r in rows {
         let mut rec: Vec<String> = vec![r.step.to_string(), r.h.to_string()];
         rec.extend(r.q.iter().map(|v| v.to_string()));
+        for values in [&r.velocity, &r.acceleration] {
+            if values.len() == n {
+                rec.extend(values.iter().map(|v| v.to_string()));
+            } else {
+                // Not known: empty cells.
+                rec.extend((0..n).map(|_| String::new()));
+            }
+        }
         rec.extend(r.position.iter().map(|v| v.to_string()));
         rec.extend(r.rotation.iter().flatten().map(|v| v.to_string()));
         rec.push(r.v.to_string());

@@ -3,8 +3,8 @@
 //! | file | what |
 //! |---|---|
 //! | `arm.svg`, `arm.png` | three orthographic views (top XY, front XZ, side YZ) with ticks in the length unit: obstacle silhouettes and names, the end-effector path, the arm at six instants (blue = start, red = end), the waypoints and target (green), a legend; the path's escape stretches (detours teal, walks orange, the return dashed brown) with a diamond where each escape started |
-//! | `plots.svg`, `plots.png` | `V`, position and orientation errors, clearance `C - 1` against step (log scales, units, legends, the engage clearance); the steps spent escaping shaded, a band per escape |
-//! | `viewer.html` | the run in 3-D (three.js, inlined: works offline): links with thickness, obstacle meshes, path (escape stretches coloured), target frame; orbit, zoom, pan, play, scrub; the step's `V`, errors, clearance and escape |
+//! | `plots.svg`, `plots.png` | `V`, position and orientation errors, clearance `C - 1` against step (log scales, units, legends, the engage clearance); each joint's velocity / rate limit and acceleration / acceleration limit (linear, the limits `±1` dashed, the largest marked); the steps spent escaping shaded, a band per escape |
+//! | `viewer.html` | the run in 3-D (three.js, inlined: works offline): links with thickness, obstacle meshes, path (escape stretches coloured), target frame; orbit, zoom, pan, play, scrub; the step's `V`, errors, clearance and escape; a bar chart of each joint's velocity and acceleration as fractions of their limits |
 //! | `motion.gif` | the three views with the arm moving (for READMEs and reports) |
 //! | `animation.html` | the three views playing the motion as SVG (no WebGL needed) |
 //!

@@ -16,6 +16,15 @@
 //! `(lat + 1) x lon` grid of world points. The row where each escape started
 //! is always among the frames.
 //!
+//! What the drives are asked for: `joint_names`, and per frame each
+//! joint's velocity as a fraction of its rate limit (`velocity_fraction`,
+//! `frames x n`, row-major) and its acceleration as a fraction of its
+//! acceleration limit (`acceleration_fraction`), the limits from
+//! `Problem::drive`; `null` when the trajectory has no velocities (a file
+//! written before them). The page draws them as a bar chart per frame
+//! (`|fraction|`, the limit a line at 1, a bar over it red) and names the
+//! largest of each.
+//!
 //! The link capsules ([`capp_core::self_collision`]): `capsules`, each
 //! link's radius (link `k` is the chord between origins `o_k` and
 //! `o_{k+1}`, so the page draws it from the frames it already has);
@@ -35,7 +44,7 @@ use super::views::{bounds, escape_color, frames, origins, surface};
 use crate::escapes::{classify, side_name, Kind};
 use crate::geometry::{forward, Geometry};
 use crate::problem::Problem;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Trajectory, TrajectoryRow};
 
 /// Most frames in a page.
 pub const FRAMES: usize = 400;
@@ -141,6 +150,30 @@ pub fn closest_links(
         .collect()
 }
 
+/// Per picked row, each joint's `value / limit(joint)`, flat (`null` for
+/// the whole list when a picked row has no values, or the problem fewer
+/// limits than joints).
+fn fractions(
+    t: &Trajectory,
+    picks: &[usize],
+    value: fn(&TrajectoryRow) -> Option<&Vec<f64>>,
+    limit: impl Fn(usize) -> Option<f64>,
+) -> String {
+    let Some(limits) = (0..t.joints).map(limit).collect::<Option<Vec<f64>>>() else {
+        return "null".into();
+    };
+    let mut flat = Vec::with_capacity(picks.len() * t.joints);
+    for &k in picks {
+        match value(&t.rows[k]) {
+            Some(v) if v.len() == t.joints => {
+                flat.extend(v.iter().zip(&limits).map(|(x, l)| Some(x / l)))
+            }
+            _ => return "null".into(),
+        }
+    }
+    list(flat)
+}
+
 /// The `RUN` object.
 pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
     let origins = origins(problem, t);
@@ -209,6 +242,39 @@ pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
         rows(&|k| t.rows[k].orientation_error)
     );
     let _ = writeln!(s, "\"clearance\": {},", rows(&|k| t.rows[k].clearance));
+    let names: Vec<String> = (0..t.joints)
+        .map(|j| {
+            string(
+                problem
+                    .joint_names
+                    .get(j)
+                    .filter(|n| !n.is_empty())
+                    .map_or(&format!("joint {}", j + 1), |n| n),
+            )
+        })
+        .collect();
+    let _ = writeln!(s, "\"joint_names\": [{}],", names.join(","));
+    let limits = &problem.drive.joints;
+    let _ = writeln!(
+        s,
+        "\"velocity_fraction\": {},",
+        fractions(
+            t,
+            &picks,
+            |r| r.velocity.as_ref(),
+            |j| limits.get(j).map(|l| l.max_rate)
+        )
+    );
+    let _ = writeln!(
+        s,
+        "\"acceleration_fraction\": {},",
+        fractions(
+            t,
+            &picks,
+            |r| r.acceleration.as_ref(),
+            |j| limits.get(j).map(|l| l.max_accel)
+        )
+    );
     let phrases: Vec<String> = picks
         .iter()
         .map(|&k| {
@@ -329,6 +395,7 @@ html, body {{ margin: 0; height: 100%; overflow: hidden; background: #f4f6f9;
   font: 13px "DejaVu Sans", Verdana, sans-serif; color: #1e1e1e; }}
 #view {{ position: absolute; inset: 0; }}
 #hud {{ position: absolute; left: 12px; top: 12px; width: 310px; padding: 10px 12px;
+  max-height: calc(100% - 46px); overflow-y: auto;
   background: rgba(255, 255, 255, 0.93); border: 1px solid #c8ccd4; border-radius: 6px; }}
 #hud h1 {{ font-size: 15px; margin: 0 0 8px; }}
 #controls {{ display: flex; gap: 6px; align-items: center; margin-bottom: 8px; }}
@@ -340,6 +407,19 @@ td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: ta
 #escape {{ margin: -4px 0 8px; min-height: 16px; }}
 #options {{ margin: -2px 0 8px; }} #options input {{ margin: 0 4px 0 0; vertical-align: -2px; }}
 .help {{ color: #667; font-size: 11px; margin-top: 8px; }}
+#drive {{ margin: 0 0 8px; }}
+#drive .caption {{ font-size: 11px; color: #445; margin-bottom: 3px; }}
+#drive-bars {{ position: relative; height: 64px; display: flex; align-items: flex-end; gap: 3px;
+  border-bottom: 1px solid #889; }}
+#drive-bars .joint {{ flex: 1; height: 100%; display: flex; align-items: flex-end; gap: 1px; }}
+#drive-bars .bar {{ flex: 1; min-height: 0; }}
+#drive-bars .velocity {{ background: #0072b2; }} #drive-bars .acceleration {{ background: #e69f00; }}
+#drive-bars .over {{ background: #be1e2d; }}
+#drive-limit {{ position: absolute; left: 0; right: 0; bottom: 80%; border-top: 1px dashed #be1e2d; }}
+#drive-limit span {{ position: absolute; right: 0; top: -13px; font-size: 10px; color: #be1e2d; }}
+#drive-joints {{ display: flex; gap: 3px; font-size: 9px; color: #667; }}
+#drive-joints span {{ flex: 1; text-align: center; overflow: hidden; }}
+#drive-none {{ font-size: 11px; color: #667; }}
 </style></head>
 <body>
 <div id="view"></div>
@@ -348,6 +428,9 @@ td {{ padding: 1px 0; }} td.value {{ text-align: right; font-variant-numeric: ta
 <div id="controls"><button id="play">pause</button><input id="seek" type="range" min="0" value="0"></div>
 <div id="options"><label><input type="checkbox" id="capsules"> link capsules (what self-collision keeps apart)</label></div>
 <table id="now"></table>
+<div id="drive"><div class="caption"><span class="swatch" style="background:#0072b2"></span>|velocity| / rate limit &nbsp; <span class="swatch" style="background:#e69f00"></span>|acceleration| / acceleration limit, per joint (red: over)</div>
+<div id="drive-bars"><div id="drive-limit"><span>limit 1</span></div></div>
+<div id="drive-joints"></div><div id="drive-none"></div></div>
 <div id="escape"><span class="swatch" id="escape-swatch"></span><span id="escape-text"></span></div>
 <div id="legend"></div>
 <div class="help">drag: orbit &middot; right-drag or shift-drag: pan &middot; wheel: zoom &middot; space: play / pause &middot; &larr; &rarr;: step &middot; h: home view &middot; c: link capsules &middot; viewer.html#frame=N opens at frame N, #capsules with the capsules shown</div>
