@@ -25,10 +25,8 @@ fn run_tracked(sc: &Sc, start: &[f32]) -> (Outcome, usize) {
             rows.push(p.joints().iter().map(|&x| x as f64).collect());
         })
         .unwrap();
-    let n = limits.len();
     let at = |k: isize, j: usize| rows[k.max(0) as usize][j];
-    for j in 0..n {
-        let l = &limits[j];
+    for (j, l) in limits.iter().enumerate() {
         let v = |k: isize| (at(k, j) - at(k - 1, j)) / dt;
         let a = |k: isize| (v(k) - v(k - 1)) / dt;
         for k in 0..rows.len() as isize {

@@ -192,7 +192,7 @@ impl<const N: usize> Planner<N> {
         let n = self.n.min(N).min(limits.len());
         let dt = settings.time_step_s;
         let idle = settle || (proposal.drive == Drive::Idle && !proposal.constrained);
-        let pace = if idle || !(dt > 0.0) {
+        let pace = if idle || dt.is_nan() || dt <= 0.0 {
             0.0
         } else {
             min(proposal.time_step_s / dt, 1.0)

@@ -123,12 +123,12 @@ pub fn stop_is_clear<const N: usize>(
     let mut phi = 0.0f32;
     let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
     let mut pivot_chain = 0.0f32;
-    let mut pivot_index = 0usize;
-    for ((joint, link), ((&size, &f), &d_sq)) in robot
+    for (k, ((joint, link), ((&size, &f), &d_sq))) in robot
         .joints()
         .iter()
         .zip(robot.links())
         .zip(largest[..n].iter().zip(&first[..n]).zip(distance_sq))
+        .enumerate()
     {
         match joint.kind {
             JointKind::Revolute => {
@@ -142,8 +142,6 @@ pub fn stop_is_clear<const N: usize>(
         pivot_chain = link.chain;
         let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let travel = f + second;
-        let k = pivot_index;
-        pivot_index += 1;
         let sliding_ok = planes.get(k).copied().flatten().and_then(|h| {
             let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
             let rooms = [frames.pivot(k), frames.link_end(k)].map(|p| normal.dot(&p) - h.offset);

@@ -178,7 +178,7 @@ pub const ROUNDING: f32 = 1.0e-5;
 /// in time instead of at the last tick.
 #[inline]
 pub fn braking_speed(room: f32, limits: &DriveLimits, dt: f32) -> f32 {
-    if !(room > 0.0) {
+    if room.is_nan() || room <= 0.0 {
         return 0.0;
     }
     let accel = limits.max_accel;
