@@ -311,8 +311,18 @@ impl Problem {
         }
         // The defaults are the core's own (computed in f32, as the board
         // computes them), so host and board plan to the bit.
-        let accel: Vec<f32> = self.drive.joints.iter().map(|j| j.max_accel as f32).collect();
-        let jerk: Vec<f32> = self.drive.joints.iter().map(|j| j.max_jerk as f32).collect();
+        let accel: Vec<f32> = self
+            .drive
+            .joints
+            .iter()
+            .map(|j| j.max_accel as f32)
+            .collect();
+        let jerk: Vec<f32> = self
+            .drive
+            .joints
+            .iter()
+            .map(|j| j.max_jerk as f32)
+            .collect();
         let set = if self.default_drive_limits() {
             Ok(())
         } else {
