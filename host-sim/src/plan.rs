@@ -22,6 +22,10 @@ pub struct Row {
     pub h: f32,
     /// Joint values (radians or length units).
     pub q: Vec<f32>,
+    /// Joint velocities, per joint, per second.
+    pub velocity: Vec<f32>,
+    /// Joint accelerations, per joint, per second squared.
+    pub acceleration: Vec<f32>,
     /// End-effector position.
     pub position: [f32; 3],
     /// End-effector orientation, rows of the rotation matrix.
@@ -78,6 +82,8 @@ fn row(planner: &CorePlanner, report: &StepReport, waypoints: usize, setpoint: b
         step: report.step,
         h: report.time_step_s,
         q: planner.joints().to_vec(),
+        velocity: vec![0.0; planner.joints().len()],
+        acceleration: vec![0.0; planner.joints().len()],
         position: [p.x, p.y, p.z],
         rotation: [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
         v: report.v,

@@ -367,6 +367,8 @@ fn a_step_through_a_link_is_a_self_collision_and_the_oracle_refuses_it() {
         step,
         h: if step == 0 { 0.0 } else { 0.05 },
         q: q.iter().map(|&x| x as f32).collect(),
+        velocity: vec![0.0; q.len()],
+        acceleration: vec![0.0; q.len()],
         position: [0.0; 3],
         rotation: [[0.0; 3]; 3],
         v: 0.0,
