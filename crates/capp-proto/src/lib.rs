@@ -469,6 +469,10 @@ pub enum EscapeMode {
 }
 
 /// Board to host.
+// A setpoint holds three joint vectors (about 400 bytes) and the other
+// replies a few bytes; no_std has no `Box`, and a reply lives on the stack
+// only while it is encoded or handled.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Reply {
