@@ -22,21 +22,13 @@ use capp_system_tests::capp;
 use capp_system_tests::fault_proxy::{FaultProxy, Faults};
 
 /// Setpoint rows of a `setpoints.csv` by step, without the columns a board
-/// does not send (`h_s`, `constrained`, `halvings`; the joints' velocities
-/// and accelerations `v1..vn`, `a1..an`, not in the stream yet: issue 22,
-/// item 5, the protocol's side).
+/// does not send (`h_s`, `constrained`, `halvings`).
 fn rows_by_step(path: &Path) -> BTreeMap<u32, Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let joint_rate = |c: &str| {
-        c.strip_prefix(['v', 'a'])
-            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
-    };
     let keep: Vec<usize> = (0..header.len())
-        .filter(|&i| {
-            !["h_s", "constrained", "halvings"].contains(&header[i]) && !joint_rate(header[i])
-        })
+        .filter(|&i| !["h_s", "constrained", "halvings"].contains(&header[i]))
         .collect();
     lines
         .map(|l| {

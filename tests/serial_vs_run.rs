@@ -8,7 +8,11 @@
 //! missing, damaged or rejected).
 
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
+use capp_core::{Motion, Phase};
+use capp_sim::problem::CorePlanner;
+use capp_sim::Problem;
 use capp_system_tests::capp;
 
 fn scenario(name: &str) -> PathBuf {
@@ -24,12 +28,25 @@ fn csv(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// Runs `file` both ways and compares the outputs; returns the setpoint count.
+/// A scenario of the workspace tests only (`tests/scenarios/`).
+fn test_scenario(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name)
+}
+
+/// Runs `file` (in `host-sim/scenarios/`) both ways and compares the
+/// outputs; returns the setpoint count.
 fn serial_matches_run(file: &str, elf: &Path) -> usize {
+    serial_matches_run_at(&scenario(file), elf)
+}
+
+/// [`serial_matches_run`] for the scenario at `path`.
+fn serial_matches_run_at(path: &Path, elf: &Path) -> usize {
     let dir = tempfile::tempdir().unwrap();
     let host = dir.path().join("host");
     let board = dir.path().join("board");
-    let path = scenario(file);
+    let file = path.file_name().unwrap().to_str().unwrap();
     let path = path.to_str().unwrap();
     let host_exit = capp(&["run", path, "--out", host.to_str().unwrap(), "--quiet"]);
     let board_exit = capp(&[
@@ -51,6 +68,10 @@ fn serial_matches_run(file: &str, elf: &Path) -> usize {
     );
     assert!(summary.contains("missing:           0 "), "{summary}");
     assert!(summary.contains("damaged frames:    0 "), "{summary}");
+    assert!(
+        summary.contains(" ticks over the control period, "),
+        "{summary}"
+    );
 
     let expected = csv(&host.join("setpoints.csv"));
     let received = csv(&board.join("setpoints.csv"));
@@ -59,16 +80,10 @@ fn serial_matches_run(file: &str, elf: &Path) -> usize {
     // Per-step details a setpoint frame does not carry (the board reports
     // its escape in `Status`, not per setpoint).
     let not_sent = ["h_s", "constrained", "halvings", "escape"];
-    // The joints' velocities and accelerations (`v1..vn`, `a1..an`): not
-    // in the setpoint stream yet (issue 22, item 5: the protocol's side).
-    let joint_rate = |c: &str| {
-        c.strip_prefix(['v', 'a'])
-            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
-    };
     assert_eq!(received.len(), expected.len(), "same number of setpoints");
     for (row, (e, r)) in expected.iter().zip(&received).enumerate().skip(1) {
         for (column, (a, b)) in header.iter().zip(e.iter().zip(r)) {
-            if !not_sent.contains(&column.as_str()) && !joint_rate(column) {
+            if !not_sent.contains(&column.as_str()) {
                 assert_eq!(a, b, "setpoint row {row}, column {column}");
             }
         }
@@ -136,4 +151,96 @@ fn a_snake_kept_off_itself_on_the_board_is_the_host_plan() {
     };
     let n = serial_matches_run("snake_fold.toml", &elf);
     assert!(n > 1, "{n} setpoints");
+}
+
+/// Tracked motion on the board (issue 22, protocol 7): the snake of
+/// `snake_fold.toml` in fixed ticks of 0.05 s, each joint within its rate,
+/// acceleration and jerk limits. Through `capp serial` the board's outputs
+/// are `capp run`'s (positions bit for bit); in process, every setpoint's
+/// velocities and accelerations are the host planner's drive state after
+/// that tick (`Planner::drive`), bit for bit too, and the board reports how
+/// many ticks overran their period.
+#[test]
+fn a_tracked_plan_on_the_board_is_the_host_plan_with_its_drive_state() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let path = test_scenario("snake_fold_tracked.toml");
+    let n = serial_matches_run_at(&path, &elf);
+    assert!(n > 20, "{n} setpoints");
+
+    let problem = Problem::load(&path).unwrap();
+    assert_eq!(problem.settings.motion, Motion::Tracked);
+    let scenario = problem.validate().unwrap();
+    // The host: capp run's planner (`capp_sim::plan::run`), every tick's
+    // drive state kept, positions and plan time with it.
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let mut planner = CorePlanner::new(&scenario, &problem.start).unwrap();
+    let state = |p: &CorePlanner| {
+        (
+            bits(p.joints()),
+            bits(p.drive().velocity()),
+            bits(p.drive().acceleration()),
+        )
+    };
+    let mut expected = vec![(0, state(&planner))];
+    planner
+        .run(&scenario, |planner, report| {
+            expected.push((report.step, state(planner)));
+        })
+        .unwrap();
+    assert!(matches!(planner.phase(), Phase::Done(_)));
+
+    let (_qemu, mut link) = capp_link::qemu::Qemu::launch(&elf, None).unwrap();
+    let (run, report) = capp_sim::serial::plan_on_board(
+        &mut link,
+        &problem,
+        &scenario,
+        Duration::from_secs(30),
+        |_| {},
+    )
+    .unwrap();
+    eprintln!("{report}");
+    assert!(report.whole(), "{report}");
+    // `[output] setpoints = 1`: every tick is a setpoint.
+    assert_eq!(run.rows.len(), expected.len(), "one setpoint per tick");
+    let dt = problem.settings.time_step_s;
+    let mut moved = false;
+    let mut accelerated = false;
+    for (row, (step, (q, v, a))) in run.rows.iter().zip(&expected) {
+        assert_eq!(row.step, *step);
+        assert_eq!(bits(&row.q), *q, "positions after tick {step}");
+        assert_eq!(bits(&row.velocity), *v, "velocities after tick {step}");
+        assert_eq!(
+            bits(&row.acceleration),
+            *a,
+            "accelerations after tick {step}"
+        );
+        // Fixed ticks: the plan time (an f32 sum) advances by the control
+        // period.
+        if *step > 0 {
+            let t = (*step as f32 * dt).max(1.0);
+            assert!(
+                (row.h - dt).abs() <= 4.0 * f32::EPSILON * t,
+                "tick {step} lasted {} s",
+                row.h
+            );
+        }
+        moved |= row.velocity.iter().any(|&x| x != 0.0);
+        accelerated |= row.acceleration.iter().any(|&x| x != 0.0);
+    }
+    assert!(moved && accelerated, "the drive state is not all zeros");
+    // Arrived at rest, as the tracker brings it.
+    let last = run.rows.last().unwrap();
+    let rates = problem.joints.iter().map(|j| j.max_rate);
+    for (v, rate) in last.velocity.iter().zip(rates) {
+        assert!(v.abs() <= 0.01 * rate, "{v} at the end");
+    }
+    // Under QEMU the cycle counter runs in emulated time, which follows the
+    // host's speed: the count is reported, whatever it is on a busy machine.
+    eprintln!(
+        "ticks over the control period on the board: {} of {}",
+        report.period_overruns,
+        expected.len() - 1
+    );
 }

@@ -137,7 +137,7 @@ macro_rules! app {
                 // SAFETY: `init` runs once.
                 let node = unsafe { crate::node() };
                 node.set_stack_probe(stack::peak);
-                node.set_cycle_counter(board::cycles);
+                node.set_cycle_counter(board::cycles, board::CORE_HZ);
                 let (producer, consumer) = cx.local.queue.split();
                 (
                     Shared {},

@@ -1,5 +1,5 @@
 //! The serial protocol's receive side on arbitrary bytes: the accumulator
-//! (the board's 255-byte one and a tiny one that overflows often), `decode`
+//! (the board's 511-byte one and a tiny one that overflows often), `decode`
 //! of commands and replies, and, when a message decodes, encode -> decode ->
 //! encode giving the same bytes.
 //!

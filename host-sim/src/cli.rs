@@ -307,6 +307,9 @@ fn serial_cmd(
     if !whole {
         eprintln!("capp serial: the stream from the board is incomplete (see the summary)");
     }
+    if let Some(warning) = summary.link.as_ref().and_then(|l| l.period_warning()) {
+        eprintln!("capp serial: {warning}");
+    }
     Ok(if result.outcome == Outcome::Reached && whole {
         ExitCode::SUCCESS
     } else {

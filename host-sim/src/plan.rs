@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use capp_core::avoidance::Clearance;
 use capp_core::escape::EscapeState;
 use capp_core::setpoint::Decimator;
-use capp_core::{Motion, Outcome, Phase, StepReport};
+use capp_core::{Outcome, Phase, StepReport};
 
 use crate::problem::{CorePlanner, CoreScenario, LoadError, Problem};
 
@@ -84,32 +84,13 @@ impl RunResult {
     }
 }
 
-/// Every joint's velocity and acceleration after `report`'s step, the
-/// step before it having left `previous` (`None` at row 0; module docs).
-fn drive(
-    planner: &CorePlanner,
-    report: &StepReport,
-    motion: Motion,
-    previous: Option<&[f32]>,
-) -> (Vec<f32>, Vec<f32>) {
-    let n = planner.joints().len();
-    if motion == Motion::Tracked {
-        let d = planner.drive();
-        return (d.velocity().to_vec(), d.acceleration().to_vec());
-    }
-    let (Some(previous), h) = (previous, report.time_step_s) else {
-        return (vec![0.0; n], vec![0.0; n]);
-    };
-    if h.is_nan() || h <= 0.0 {
-        return (vec![0.0; n], vec![0.0; n]);
-    }
-    let velocity = planner.rates().to_vec();
-    let acceleration = velocity
-        .iter()
-        .zip(previous)
-        .map(|(v, v0)| (v - v0) / h)
-        .collect();
-    (velocity, acceleration)
+/// Every joint's velocity and acceleration after a step: the core's
+/// ([`capp_core::Planner::drive`]: the tracker's state, or for a stepped
+/// plan the step's rate and its change over the step), as the board streams
+/// them.
+fn drive(planner: &CorePlanner) -> (Vec<f32>, Vec<f32>) {
+    let d = planner.drive();
+    (d.velocity().to_vec(), d.acceleration().to_vec())
 }
 
 fn row(
@@ -157,9 +138,8 @@ pub fn run(
         .map_err(|e| LoadError::new(&problem.source, problem.lines.start, e.to_string()))?;
     let mut decimator = Decimator::new(problem.setpoints);
     let waypoints = problem.waypoints.len();
-    let motion = scenario.settings().motion;
     let first = *planner.last_report();
-    let at_start = drive(&planner, &first, motion, None);
+    let at_start = drive(&planner);
     let mut rows = vec![row(
         &planner,
         &first,
@@ -170,8 +150,7 @@ pub fn run(
     let outcome = planner
         .run(scenario, |planner, report| {
             let setpoint = decimator.offer(report);
-            let previous = rows.last().map(|r: &Row| r.velocity.as_slice());
-            let state = drive(planner, report, motion, previous);
+            let state = drive(planner);
             rows.push(row(planner, report, waypoints, setpoint, state));
             progress(report);
         })

@@ -3,8 +3,10 @@
 //! `capp run`.
 //!
 //! The board streams setpoints (sequence number, step, joint vector, plan
-//! time, waypoint) chosen by the problem's own setpoint rule, so the received
-//! stream is the `setpoints.csv` of `capp run`: the joint vectors bit for bit.
+//! time, waypoint, the joints' velocities and accelerations) chosen by the
+//! problem's own setpoint rule, so the received stream is the
+//! `setpoints.csv` of `capp run`: the joint vectors bit for bit (and with
+//! tracked motion the drive state, `Planner::drive`, bit for bit too).
 //! Everything else in a row (end-effector pose, `V`, errors, clearance) is
 //! recomputed here from the received joints with the same `capp-core`
 //! functions the planner uses. What a board does not send is left empty:
@@ -69,6 +71,9 @@ pub struct LinkReport {
     pub rejected: u32,
     /// Timer ticks the board missed while stepping.
     pub overruns: u32,
+    /// Ticks of a tracked plan whose work took longer than the control
+    /// period on the board's cycle counter (0 for stepped plans).
+    pub period_overruns: u32,
     /// The board's deepest stack use, bytes (0: not measured).
     pub stack_peak: u32,
     /// Received bytes the board's receive queue could not hold (since boot).
@@ -87,6 +92,17 @@ impl LinkReport {
     /// Gaps the board's drop counter does not explain: lost on the line.
     pub fn lost_on_line(&self) -> u32 {
         (self.missing.len() as u32).saturating_sub(self.dropped_by_board)
+    }
+
+    /// A warning line when a tracked tick overran its control period on the
+    /// board.
+    pub fn period_warning(&self) -> Option<String> {
+        (self.period_overruns > 0).then(|| {
+            format!(
+                "warning: {} tracked ticks took longer than the control period on the board (it could not keep the drive's period in real time)",
+                self.period_overruns
+            )
+        })
     }
 }
 
@@ -122,9 +138,12 @@ impl fmt::Display for LinkReport {
         )?;
         writeln!(
             f,
-            "board:             {} timer overruns, peak stack {} bytes, {} receive queue overflows",
-            self.overruns, self.stack_peak, self.rx_overflows
+            "board:             {} timer overruns, {} ticks over the control period, peak stack {} bytes, {} receive queue overflows",
+            self.overruns, self.period_overruns, self.stack_peak, self.rx_overflows
         )?;
+        if let Some(warning) = self.period_warning() {
+            writeln!(f, "{warning}")?;
+        }
         let [min, mean, max] = self.step_cycles;
         writeln!(
             f,
@@ -243,6 +262,7 @@ pub fn plan_on_board<T: Read + Write>(
         duplicates,
         rejected,
         overruns: record.status.overruns,
+        period_overruns: record.status.period_overruns,
         stack_peak: record.status.stack_peak,
         rx_overflows: record.status.rx_overflows,
         step_cycles: [
@@ -270,6 +290,8 @@ fn rows_from_stream(scenario: &CoreScenario, record: &PlanRecord) -> (Vec<Row>, 
     let mut rejected = 0;
     for s in &record.setpoints {
         let fits = s.joints.len() == n
+            && s.velocity.len() == n
+            && s.acceleration.len() == n
             && (s.waypoint as usize) < targets.len()
             && s.seq < record.status.setpoints;
         if fits {
@@ -283,11 +305,19 @@ fn rows_from_stream(scenario: &CoreScenario, record: &PlanRecord) -> (Vec<Row>, 
     received.dedup_by_key(|s| s.seq);
     let duplicates = (before - received.len()) as u32;
     let mut previous_time = 0.0f32;
+    let mut previous_step = 0u32;
+    let tracked = scenario.settings().motion == capp_core::Motion::Tracked;
     let rows = received
         .into_iter()
         .map(|s| {
-            let h = s.time_s - previous_time;
+            // Tracked: a whole number of periods since the last setpoint.
+            let h = if tracked {
+                s.step.saturating_sub(previous_step) as f32 * scenario.settings().time_step_s
+            } else {
+                s.time_s - previous_time
+            };
             previous_time = s.time_s;
+            previous_step = s.step;
             derived_row(scenario, s, h)
         })
         .collect();
@@ -320,8 +350,8 @@ fn derived_row(scenario: &CoreScenario, s: &capp_link::Setpoint, h: f32) -> Row 
         step: s.step,
         h,
         q: s.joints.clone(),
-        velocity: vec![0.0; s.joints.len()],
-        acceleration: vec![0.0; s.joints.len()],
+        velocity: s.velocity.clone(),
+        acceleration: s.acceleration.clone(),
         position: [p.x, p.y, p.z],
         rotation: [0, 1, 2].map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]),
         v: error.v,

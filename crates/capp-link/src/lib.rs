@@ -124,6 +124,11 @@ pub struct Setpoint {
     pub time_s: f32,
     /// The waypoint being approached, 0-based.
     pub waypoint: u8,
+    /// Each joint's velocity, per second (tracked: the drive state; stepped:
+    /// the step's rate).
+    pub velocity: Vec<f32>,
+    /// Each joint's acceleration, per second squared (stepped: zeros).
+    pub acceleration: Vec<f32>,
 }
 
 /// Everything received for one plan.
@@ -427,12 +432,16 @@ impl<T: Read + Write> Link<T> {
                     joints,
                     time_s,
                     waypoint,
+                    velocity,
+                    acceleration,
                 } => setpoints.push(Setpoint {
                     seq,
                     step,
                     joints: joints.to_vec(),
                     time_s,
                     waypoint,
+                    velocity: velocity.to_vec(),
+                    acceleration: acceleration.to_vec(),
                 }),
                 Reply::Status(s) => {
                     watch(&s);

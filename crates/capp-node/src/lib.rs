@@ -11,7 +11,7 @@
 //! ## Transmit policy (what happens when the UART cannot keep up)
 //!
 //! Frames wait in a bounded byte queue of `TXQ` bytes that [`Node::poll`]
-//! (or [`Node::poll_queue`]) drains without blocking. `RESERVE = 2 * MAX_FRAME` bytes of it are kept for
+//! (or [`Node::poll_queue`]) drains without blocking. [`RESERVE`] (512) bytes of it are kept for
 //! replies:
 //!
 //! * **Setpoints** are queued only if they fit with the reserve left free;
@@ -40,7 +40,19 @@
 //! One planner step per tick. Ticks that arrive while a step runs are not
 //! made up: they count as `Status::overruns`. With a cycle counter
 //! ([`Node::set_cycle_counter`]) each tick's work is timed and the fewest,
-//! mean and most cycles of the plan go into `Status::step_cycles_*`.
+//! mean and most cycles of the plan go into `Status::step_cycles_*`; in a
+//! tracked plan (capp-core's `Motion::Tracked`), a tick whose work took more
+//! cycles than the control period (`time_step_s` times the core clock the
+//! counter runs at) counts in `Status::period_overruns`: the board could not
+//! have kept the drive's period in real time. A stepped plan has no period
+//! and counts none.
+//!
+//! ## Setpoints
+//!
+//! Each carries the joints' positions, velocities and accelerations: with
+//! tracked motion the planner's drive state after the tick
+//! (`Planner::drive`), with stepped motion the step's rate as the velocity
+//! and its change over the step as the acceleration (`Planner::drive` too).
 //!
 //! ## Memory
 //!
@@ -69,19 +81,22 @@ pub mod rx;
 use capp_core::scenario::MAX_JOINT_GOALS;
 use capp_core::setpoint::Decimator;
 use capp_core::{
-    MissionError, ObstacleError, Phase, Planner, RobotError, Scenario, ScenarioError,
+    MissionError, Motion, ObstacleError, Phase, Planner, RobotError, Scenario, ScenarioError,
     SetpointFilter, StartError, SuperEllipsoid,
 };
 use capp_proto::{
-    Command, ErrorCode, EscapeMode, FrameError, Part, Preset, Reply, State, Status, MAX_FRAME,
-    MAX_JOINTS as N, MAX_OBSTACLES as M, MAX_WAYPOINTS as W, NO_COMMAND, NO_INDEX,
+    Command, ErrorCode, EscapeMode, FrameError, Joints, Part, Preset, Reply, State, Status,
+    MAX_FRAME, MAX_JOINTS as N, MAX_OBSTACLES as M, MAX_WAYPOINTS as W, NO_COMMAND, NO_INDEX,
 };
 use embedded_hal_nb::{nb, serial};
 use heapless::{Deque, Vec};
 use rx::{Consumer, RxCounters};
 
-/// Bytes of the transmit queue kept free for replies.
-pub const RESERVE: usize = 2 * MAX_FRAME;
+/// Bytes of the transmit queue kept free for replies: two frames of any
+/// reply but a setpoint, each at most 256 bytes (capp-proto's wire tests
+/// pin that), whatever [`MAX_FRAME`] (which a setpoint of 32 joints with its
+/// velocities and accelerations needs) is.
+pub const RESERVE: usize = 512;
 
 /// A source of timer ticks (the control-loop rate).
 pub trait Ticker {
@@ -169,6 +184,7 @@ const IDLE: Status = Status {
     step_cycles_max: 0,
     escape: EscapeMode::Descending,
     escape_attempt: 0,
+    period_overruns: 0,
 };
 
 /// The plan: valid while `Status::state` is `Running` (and after, until the
@@ -181,6 +197,11 @@ struct Active {
     streaming: bool,
     /// Plan time, seconds: the sum of the step sizes taken.
     time_s: f32,
+    /// Tracked motion (`Motion::Tracked`): setpoints carry the drive state.
+    tracked: bool,
+    /// Cycles of the control period, for `Status::period_overruns`: tracked
+    /// plans on a board with a cycle counter, else `None`.
+    period_cycles: Option<u32>,
 }
 
 type Refusal = (ErrorCode, u8);
@@ -196,6 +217,8 @@ pub struct Node<const TXQ: usize> {
     final_pending: bool,
     stack_probe: Option<fn() -> u32>,
     cycle_counter: Option<fn() -> u32>,
+    /// The rate `cycle_counter` counts at, Hz (0: unknown).
+    cycle_hz: u32,
     cycles: CycleStats,
     /// `RxCounters::line_errors` already added to `status.rx_errors`.
     line_errors_seen: u32,
@@ -255,11 +278,14 @@ impl<const TXQ: usize> Node<TXQ> {
                 decimator: Decimator::new(SetpointFilter::Every(1)),
                 streaming: false,
                 time_s: 0.0,
+                tracked: false,
+                period_cycles: None,
             },
             status: IDLE,
             final_pending: false,
             stack_probe: None,
             cycle_counter: None,
+            cycle_hz: 0,
             cycles: CycleStats {
                 min: 0,
                 max: 0,
@@ -283,6 +309,7 @@ impl<const TXQ: usize> Node<TXQ> {
             final_pending,
             stack_probe,
             cycle_counter,
+            cycle_hz,
             cycles,
             line_errors_seen,
         } = self;
@@ -295,24 +322,32 @@ impl<const TXQ: usize> Node<TXQ> {
             decimator,
             streaming,
             time_s,
+            tracked,
+            period_cycles,
         } = plan;
         scenario.clear();
         planner.clear();
         *decimator = Decimator::new(SetpointFilter::Every(1));
         *streaming = false;
         *time_s = 0.0;
+        *tracked = false;
+        *period_cycles = None;
         *status = IDLE;
         *final_pending = false;
         *stack_probe = None;
         *cycle_counter = None;
+        *cycle_hz = 0;
         *cycles = CycleStats::default();
         *line_errors_seen = 0;
     }
 
     /// Sets the free-running cycle counter (wrapping `u32`, e.g. the DWT's
-    /// `CYCCNT`) that times each tick's work, for `Status::step_cycles_*`.
-    pub fn set_cycle_counter(&mut self, counter: fn() -> u32) {
+    /// `CYCCNT`) that times each tick's work, for `Status::step_cycles_*`,
+    /// and the rate it counts at (`hz`, the core clock; 0: unknown), for
+    /// `Status::period_overruns`. Takes effect at the next `Run`.
+    pub fn set_cycle_counter(&mut self, counter: fn() -> u32, hz: u32) {
         self.cycle_counter = Some(counter);
+        self.cycle_hz = hz;
     }
 
     /// Sets the function that measures the deepest stack use, for `Status`.
@@ -593,6 +628,13 @@ impl<const TXQ: usize> Node<TXQ> {
         plan.decimator = Decimator::new(filter);
         plan.streaming = false;
         plan.time_s = 0.0;
+        let settings = plan.scenario.settings();
+        plan.tracked = settings.motion == Motion::Tracked;
+        plan.period_cycles = match (plan.tracked, self.cycle_counter, self.cycle_hz) {
+            // `as` saturates: a period beyond u32::MAX cycles is never overrun.
+            (true, Some(_), hz) if hz > 0 => Some((settings.time_step_s * hz as f32) as u32),
+            _ => None,
+        };
         self.cycles = CycleStats::default();
         let s = &mut self.status;
         s.state = State::Running;
@@ -604,6 +646,7 @@ impl<const TXQ: usize> Node<TXQ> {
         s.step_cycles_min = 0;
         s.step_cycles_mean = 0;
         s.step_cycles_max = 0;
+        s.period_overruns = 0;
         log::info!("plan started");
         Ok(())
     }
@@ -635,7 +678,13 @@ impl<const TXQ: usize> Node<TXQ> {
                 return;
             }
         };
-        active.time_s += report.time_step_s;
+        // Tracked: every tick is one period, so the time is the tick count
+        // times it (a running f32 sum would drift off t = k dt).
+        active.time_s = if active.tracked {
+            report.step as f32 * active.scenario.settings().time_step_s
+        } else {
+            active.time_s + report.time_step_s
+        };
         let s = &mut self.status;
         s.step = report.step;
         s.v = report.v;
@@ -645,11 +694,24 @@ impl<const TXQ: usize> Node<TXQ> {
         (s.escape, s.escape_attempt) = capp_proto::escape_status(report.escape);
         self.offer_setpoint(&report);
         if let (Some(counter), Some(t0)) = (self.cycle_counter, started) {
-            self.cycles.add(counter().wrapping_sub(t0));
+            let cycles = counter().wrapping_sub(t0);
+            self.cycles.add(cycles);
             let s = &mut self.status;
             s.step_cycles_min = self.cycles.min;
             s.step_cycles_mean = self.cycles.mean();
             s.step_cycles_max = self.cycles.max;
+            if self
+                .plan
+                .period_cycles
+                .is_some_and(|period| cycles > period)
+            {
+                s.period_overruns = s.period_overruns.wrapping_add(1);
+                log::warning!(
+                    "tick {} overran the control period: {} cycles",
+                    s.step,
+                    cycles
+                );
+            }
         }
         let s = &mut self.status;
         if let Phase::Done(outcome) = report.phase {
@@ -657,12 +719,13 @@ impl<const TXQ: usize> Node<TXQ> {
             s.outcome = Some(outcome.into());
             self.final_pending = true;
             log::info!(
-                "plan done after {} steps; cycles per step min {} mean {} max {}, overruns {}",
+                "plan done after {} steps; cycles per step min {} mean {} max {}, overruns {}, period overruns {}",
                 report.step,
                 s.step_cycles_min,
                 s.step_cycles_mean,
                 s.step_cycles_max,
-                s.overruns
+                s.overruns,
+                s.period_overruns
             );
             self.flush_final();
         }
@@ -680,15 +743,24 @@ impl<const TXQ: usize> Node<TXQ> {
         let seq = s.setpoints;
         s.setpoints = s.setpoints.wrapping_add(1);
         let last_waypoint = active.scenario.targets().len().saturating_sub(1) as u8;
+        let planner = &active.planner;
+        let joints: Joints = Vec::from_slice(planner.joints()).unwrap_or_default();
+        // The core's drive state: the tracker's, or a stepped plan's rate
+        // and its change over the step (as `capp run` records them).
+        let drive = planner.drive();
+        let velocity: Joints = Vec::from_slice(drive.velocity()).unwrap_or_default();
+        let acceleration: Joints = Vec::from_slice(drive.acceleration()).unwrap_or_default();
         let setpoint = Reply::Setpoint {
             seq,
             step: report.step,
-            joints: Vec::from_slice(active.planner.joints()).unwrap_or_default(),
+            joints,
             time_s: active.time_s,
             waypoint: match report.phase {
                 Phase::Moving { waypoint } => waypoint,
                 Phase::Done(_) => last_waypoint,
             },
+            velocity,
+            acceleration,
         };
         let mut frame = [0u8; MAX_FRAME];
         let sent = match capp_proto::encode(&setpoint, &mut frame) {

@@ -13,6 +13,7 @@ use embedded_hal_nb::{nb, serial};
 
 use super::*;
 
+mod drive;
 mod line;
 
 /// A UART that takes at most `budget` bytes per `refill` (a slow line).
@@ -205,7 +206,7 @@ fn a_reset_node_is_a_new_node() {
     // A node in some other state: another plan stopped half way, a draft with
     // obstacles and settings, a bad frame counted, replies still queued.
     let mut node = Node::<2048>::new();
-    node.set_cycle_counter(|| 7);
+    node.set_cycle_counter(|| 7, 1000);
     let mut uart = FakeUart::new(usize::MAX);
     load(&mut uart);
     uart.send(&Command::Settings(capp_core::Settings::default().into()));
@@ -241,6 +242,7 @@ fn a_fast_uart_gets_every_setpoint_bit_for_bit() {
             joints,
             time_s,
             waypoint,
+            ..
         } = r
         else {
             panic!("{r:?}")

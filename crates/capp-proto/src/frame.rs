@@ -13,8 +13,10 @@ use crate::crc::crc32;
 use crate::VERSION;
 
 /// Largest frame on the wire, delimiter included. Every message of this
-/// protocol fits; a receiver needs an accumulator of `MAX_FRAME - 1` bytes.
-pub const MAX_FRAME: usize = 256;
+/// protocol fits (the largest, a setpoint of 32 joints with their velocities
+/// and accelerations, is 411 bytes); a receiver needs an accumulator of
+/// `MAX_FRAME - 1` bytes.
+pub const MAX_FRAME: usize = 512;
 
 /// Largest unencoded frame body (version + message + CRC) that fits [`MAX_FRAME`].
 pub const MAX_BODY: usize = MAX_FRAME - 1 - 1 - (MAX_FRAME - 2) / 254;

@@ -442,6 +442,12 @@ pub struct Status {
     pub escape: EscapeMode,
     /// Escape attempts made for the current waypoint (since version 3).
     pub escape_attempt: u8,
+    /// Ticks of a tracked plan (`Settings::tracked`) whose work (the planner
+    /// step and its setpoint) took longer than the control period
+    /// (`time_step_s`) on the board's cycle counter, this plan: the board
+    /// could not have kept the drive's period in real time. Always 0 for a
+    /// stepped plan or without a cycle counter (since version 7).
+    pub period_overruns: u32,
 }
 
 /// The planner's dead-end escape, as the board reports it.
@@ -463,6 +469,10 @@ pub enum EscapeMode {
 }
 
 /// Board to host.
+// A setpoint holds three joint vectors (about 400 bytes) and the other
+// replies a few bytes; no_std has no `Box`, and a reply lives on the stack
+// only while it is encoded or handled.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Reply {
@@ -509,6 +519,15 @@ pub enum Reply {
         /// The waypoint being approached, 0-based (the last one once the plan
         /// is over) (since version 2).
         waypoint: u8,
+        /// Each joint's velocity, per second (radians or length units): with
+        /// tracked motion the drive state after this tick (capp-core's
+        /// `Planner::drive`); stepped, the rate of the last step
+        /// (`Planner::rates`). One value per joint (since version 7).
+        velocity: Joints,
+        /// Each joint's acceleration, per second squared: tracked, the drive
+        /// state after this tick; stepped, zeros (a stepped plan has no
+        /// acceleration of its own). One value per joint (since version 7).
+        acceleration: Joints,
     },
     /// 4: status, on request and at the end of every plan.
     Status(Status),

@@ -6,7 +6,7 @@
 use capp_proto::*;
 
 fn payload<T: serde::Serialize>(m: &T) -> Vec<u8> {
-    let mut buf = [0u8; 300];
+    let mut buf = [0u8; MAX_FRAME];
     postcard::to_slice(m, &mut buf).unwrap().to_vec()
 }
 
@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 06 00 01, CRC-32 0x8ccb9536 (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 07 00 01, CRC-32 0x8d09ff01 (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x06, 0x06, 0x01, 0x36, 0x95, 0xcb, 0x8c, 0x00]
+        &[0x02, 0x07, 0x06, 0x01, 0x01, 0xff, 0x09, 0x8d, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x06, 0x01, 0x08, 0xd3, 0x1c, 0x0c, 0xec, 0x00]
+        &[0x08, 0x07, 0x01, 0x08, 0xe4, 0x76, 0xce, 0xed, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x06, 0x02, 0xff, 0x01, 0xff, 0x17, 0x20, 0xea, 0x69, 0x00]
+        &[0x0a, 0x07, 0x02, 0xff, 0x01, 0xff, 0xa7, 0x09, 0x8a, 0x54, 0x00]
     );
 }
 
@@ -301,7 +301,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x06, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x07, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -340,6 +340,8 @@ fn every_reply_is_pinned() {
             joints: Joints::from_slice(&[1.0, 0.5]).unwrap(),
             time_s: 2.0,
             waypoint: 1,
+            velocity: Joints::from_slice(&[-1.0, 0.0]).unwrap(),
+            acceleration: Joints::from_slice(&[2.0, 0.5]).unwrap(),
         },
         &cat(&[
             &[0x03, 0x80, 0x01, 0x81, 0x01, 0x02],
@@ -347,6 +349,13 @@ fn every_reply_is_pinned() {
             &HALF,
             &TWO,
             &[0x01],
+            // Since version 7: the velocities, then the accelerations.
+            &[0x02],
+            &MINUS_ONE,
+            &ZERO,
+            &[0x02],
+            &TWO,
+            &HALF,
         ]),
     );
     let status = Status {
@@ -368,6 +377,7 @@ fn every_reply_is_pinned() {
         step_cycles_max: 20_000,
         escape: EscapeMode::Detouring,
         escape_attempt: 3,
+        period_overruns: 300,
     };
     check(
         &Reply::Status(status),
@@ -381,6 +391,8 @@ fn every_reply_is_pinned() {
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
             &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
             &[0x02, 0x03],
+            // Since version 7: period_overruns.
+            &[0xAC, 0x02],
         ]),
     );
     // The escape modes of version 4: searching (4) and following (5).
@@ -401,6 +413,7 @@ fn every_reply_is_pinned() {
                 &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
                 &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
                 &[tag, 0x03],
+                &[0xAC, 0x02],
             ]),
         );
     }
@@ -421,6 +434,7 @@ fn every_reply_is_pinned() {
             &[0x03, 0x01, 0x02, 0x00, 0x80, 0x01],
             &[0x05, 0x01, 0xAC, 0x02, 0xA0, 0x9C, 0x01],
             &[0x02, 0x03],
+            &[0xAC, 0x02],
         ]),
     );
     for (i, s) in [State::Idle, State::Running, State::Done, State::Stopped]
@@ -444,11 +458,57 @@ fn the_largest_messages_fit_a_frame() {
         joints: full.clone(),
         time_s: f32::MAX,
         waypoint: u8::MAX,
+        velocity: full.clone(),
+        acceleration: full.clone(),
     };
     let n = encode(&m, &mut f).unwrap();
+    // 403 payload bytes, 408 of body, one COBS block of 254 and one of 154,
+    // the delimiter (PROTOCOL.md, section 1).
+    assert_eq!(n, 411);
     assert!(n <= MAX_FRAME);
     let n = encode(&Command::Start(full), &mut f).unwrap();
     assert!(n <= MAX_FRAME);
+    // Every reply but a setpoint fits 256 bytes (capp-node keeps 512 bytes
+    // of its transmit queue for two of them): the largest is a status.
+    let status = Status {
+        state: State::Stopped,
+        outcome: Some(Outcome::Capped),
+        step: u32::MAX,
+        v: f32::MAX,
+        position_error: f32::MAX,
+        orientation_error: f32::MAX,
+        clearance: Some(f32::MAX),
+        setpoints: u32::MAX,
+        dropped: u32::MAX,
+        rx_errors: u32::MAX,
+        overruns: u32::MAX,
+        stack_peak: u32::MAX,
+        rx_overflows: u32::MAX,
+        step_cycles_min: u32::MAX,
+        step_cycles_mean: u32::MAX,
+        step_cycles_max: u32::MAX,
+        escape: EscapeMode::Following,
+        escape_attempt: u8::MAX,
+        period_overruns: u32::MAX,
+    };
+    for reply in [
+        Reply::Status(status),
+        Reply::Pong {
+            nonce: u32::MAX,
+            version: VERSION,
+            max_joints: u8::MAX,
+            max_obstacles: u8::MAX,
+            max_waypoints: u8::MAX,
+        },
+        Reply::Error {
+            command: u8::MAX,
+            code: ErrorCode::InvalidCapsules,
+            index: u8::MAX,
+        },
+    ] {
+        let n = encode(&reply, &mut f).unwrap();
+        assert!(n <= 256, "{reply:?}: {n} bytes");
+    }
     let capsule = Command::Capsule {
         index: u8::MAX,
         capsule: Capsule {

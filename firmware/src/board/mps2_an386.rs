@@ -10,8 +10,8 @@ use crate::tick::SysTicker;
 
 /// Board name for the log.
 pub const NAME: &str = "mps2-an386";
-/// Core clock.
-const CORE_HZ: u32 = 25_000_000;
+/// Core clock (TIMER0, the cycle counter, counts at it).
+pub const CORE_HZ: u32 = 25_000_000;
 /// Control-loop rate.
 pub const TICK_HZ: u32 = 1_000;
 const UART0: usize = 0x4000_4000;

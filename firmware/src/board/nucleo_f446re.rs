@@ -20,12 +20,14 @@ use crate::tick::SysTicker;
 
 /// Board name for the log.
 pub const NAME: &str = "nucleo-f446re";
-const CORE_HZ: u32 = 180_000_000;
+/// Core clock (the DWT cycle counter's rate).
+pub const CORE_HZ: u32 = 180_000_000;
 /// Control-loop rate.
 pub const TICK_HZ: u32 = 100;
-/// UART rate: a setpoint of 18 joints (~90 bytes) takes ~8 ms, within the
-/// 10 ms tick; a 32-joint setpoint (~140 bytes, ~12 ms) does not, so use
-/// `Run { every: 2 }` there, or setpoints are dropped (and counted).
+/// UART rate: a setpoint of 18 joints with their velocities and
+/// accelerations (protocol 7: ~240 bytes) takes ~21 ms, more than the 10 ms
+/// tick, so use `Run { every: 3 }` there (32 joints, ~410 bytes: `every: 4`),
+/// or setpoints are dropped (and counted).
 const BAUD: u32 = 115_200;
 
 /// USART2, transmit half (polled by the main loop).

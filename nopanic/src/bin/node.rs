@@ -52,7 +52,7 @@ pub extern "C" fn _start() -> ! {
         capp_node::serve(&mut node, &mut Uart, &mut Ticks)
     }
     node.reset();
-    node.set_cycle_counter(|| black_box(0));
+    node.set_cycle_counter(|| black_box(0), black_box(25_000_000));
     let mut queue = Queue::<u8, RXQ>::new();
     let (mut producer, mut consumer) = queue.split();
     let counters = RxCounters::new();

@@ -287,7 +287,14 @@ impl<const N: usize> Planner<N> {
         self.escape.search_step(scenario, target, scratch);
         self.step += 1;
         let n = self.n.min(N);
-        self.rate[..n].copy_from_slice(&self.drive.velocity()[..n]);
+        self.rate[..n].fill(0.0);
+        if scenario.settings().motion == Motion::Tracked {
+            for (r, &v) in self.rate[..n].iter_mut().zip(self.drive.velocity()) {
+                *r = v;
+            }
+        } else {
+            self.drive.record_step(&[], 0.0);
+        }
         if self.step >= scenario.settings().max_steps {
             self.phase = Phase::Done(Outcome::Capped);
         }
@@ -347,6 +354,7 @@ impl<const N: usize> Planner<N> {
             h = 0.0;
             self.rate[..n].fill(0.0);
         }
+        self.drive.record_step(&self.rate[..n], h);
         (accepted, h, halvings)
     }
 

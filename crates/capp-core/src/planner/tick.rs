@@ -163,7 +163,9 @@ impl<const N: usize> Planner<N> {
         self.drive = next;
         self.evals.accept();
         self.q[..n].copy_from_slice(&self.q_next[..n]);
-        self.rate[..n].copy_from_slice(&self.drive.velocity()[..n]);
+        for (r, &v) in self.rate[..n].iter_mut().zip(self.drive.velocity()) {
+            *r = v;
+        }
         self.error_step = self.evals.now().error.position - err;
     }
 
@@ -225,7 +227,7 @@ impl<const N: usize> Planner<N> {
                 q - joint.min
             };
             let cap = braking_speed(room, l, dt);
-            *t = t.clamp(-cap, cap);
+            *t = t.min(cap).max(-cap);
         }
     }
 
@@ -239,16 +241,18 @@ impl<const N: usize> Planner<N> {
         let limits = scenario.drive_limits();
         let n = self.n.min(N).min(limits.len());
         let dt = scenario.settings().time_step_s;
-        for (j, (joint, l)) in scenario
+        for (j, ((joint, l), &q)) in scenario
             .robot()
             .joints()
             .iter()
             .zip(limits)
+            .zip(&self.q[..n])
             .enumerate()
-            .take(n)
         {
-            let (v, a) = (next.velocity()[j], next.acceleration()[j]);
-            let end = self.q[j] + v * dt;
+            let (Some(&v), Some(&a)) = (next.velocity().get(j), next.acceleration().get(j)) else {
+                continue;
+            };
+            let end = q + v * dt;
             let (below, above) = stopping_span(v, a, l, dt);
             if end - below < joint.min || end + above > joint.max {
                 next.brake_joint(j, &self.drive, l, dt);

@@ -143,6 +143,27 @@ impl<const N: usize> DriveState<N> {
         next
     }
 
+    /// With [`crate::Motion::Stepped`]: the step just taken moved at `rate`
+    /// (per second) for `h` seconds; the velocity becomes `rate` and the
+    /// acceleration its change over `h` (both 0 for a step not taken,
+    /// `h = 0`), what the stream reports of a stepped plan.
+    pub fn record_step(&mut self, rate: &[f32], h: f32) {
+        let n = self.n.min(N);
+        let taken = h > 0.0;
+        for ((v, a), &r) in self.velocity[..n]
+            .iter_mut()
+            .zip(&mut self.acceleration[..n])
+            .zip(rate.iter().chain(core::iter::repeat(&0.0)))
+        {
+            if taken {
+                *a = (r - *v) / h;
+                *v = r;
+            } else {
+                (*v, *a) = (0.0, 0.0);
+            }
+        }
+    }
+
     /// Joint `j` of this tick takes, instead, the next tick of its stop from
     /// `from` (the state this tick started at).
     pub fn brake_joint(&mut self, j: usize, from: &Self, limits: &DriveLimits, dt: f32) {

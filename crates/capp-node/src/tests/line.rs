@@ -1,8 +1,8 @@
 //! The serial line in byte times, as on the Nucleo-F446RE: a receive register
 //! that holds one byte and overruns when it is not read within one byte time,
 //! a transmit register that sends one byte per byte time, a tick every 115
-//! byte times (100 Hz at 115 200 baud) and a planner step that lasts 3 byte
-//! times (250 us against 87 us). A host sends one command at a time, waiting
+//! byte times (100 Hz at 115 200 baud), a planner step that lasts 3 byte
+//! times (250 us against 87 us) and a setpoint every third step. A host sends one command at a time, waiting
 //! for its reply, for as long as the plan runs (its `Status` poll, pings).
 //!
 //! The polled loop ([`Node::poll`] between steps) must lose bytes here; the
@@ -27,6 +27,8 @@ use super::{host_plan_with, load_commands_with, long_plan};
 
 /// Exchanges before the plan runs: the load, the settings and `Run`.
 const LOAD: usize = 5;
+/// The stream's decimation (`Run { every }`).
+const EVERY: u32 = 3;
 use crate::rx::{self, Queue, RxCounters};
 use crate::Node;
 
@@ -206,8 +208,10 @@ fn run(design: Design) -> Outcome {
     let (mut producer, mut consumer) = queue.split();
     let counters = RxCounters::new();
     let mut load = load_commands_with(long_plan());
+    // A setpoint every third step: one of PIPS's (positions, velocities and
+    // accelerations, ~240 bytes) takes two ticks of line at 115 200 baud.
     load.push(Command::Run {
-        every: 1,
+        every: EVERY,
         error_change: None,
     });
     let mut load = load.into_iter();
@@ -331,13 +335,19 @@ fn receive_by_interrupt_loses_nothing_and_answers_every_command() {
     for (i, (c, r)) in o.host.exchanges.iter().enumerate() {
         assert!(answers(c, r), "command {i} {c:?} got {r:?}");
     }
-    // And the stream is the host's plan, bit for bit.
+    // And the stream is the host's plan, bit for bit: the start, every
+    // third step, the last.
     let plan = host_plan_with(long_plan());
-    assert_eq!(o.host.setpoints.len(), plan.len());
+    let last = plan.len() - 1;
+    let expected: Vec<usize> = (0..=last)
+        .filter(|&k| k % EVERY as usize == 0 || k == last)
+        .collect();
     assert_eq!(o.status.dropped, 0);
-    for (i, r) in o.host.setpoints.iter().enumerate() {
+    assert_eq!(o.host.setpoints.len(), expected.len());
+    for (i, (r, &k)) in o.host.setpoints.iter().zip(&expected).enumerate() {
         let Reply::Setpoint {
             seq,
+            step,
             joints,
             time_s,
             ..
@@ -345,10 +355,10 @@ fn receive_by_interrupt_loses_nothing_and_answers_every_command() {
         else {
             unreachable!()
         };
-        assert_eq!(*seq, i as u32);
+        assert_eq!((*seq, *step as usize), (i as u32, k));
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(joints), bits(&plan[i].0), "setpoint {i}");
-        assert_eq!(time_s.to_bits(), plan[i].1.to_bits());
+        assert_eq!(bits(joints), bits(&plan[k].0), "setpoint {i}");
+        assert_eq!(time_s.to_bits(), plan[k].1.to_bits());
     }
     let Some(Reply::Status(s)) = o.host.final_status else {
         panic!("no final status")
