@@ -27,14 +27,14 @@ step "firmware: format, lints, both boards"
   cd firmware
   cargo fmt --check
   cargo clippy --release -- -D warnings
-  cargo clippy --release --no-default-features --features nucleo-f446re --target-dir target/f446 -- -D warnings
+  cargo clippy --profile f446 --no-default-features --features nucleo-f446re --target-dir target/f446 -- -D warnings
   cargo build --release
-  cargo build --release --no-default-features --features nucleo-f446re --target-dir target/f446
+  cargo build --profile f446 --no-default-features --features nucleo-f446re --target-dir target/f446
 )
 
 step "firmware size (flash = .vector_table + .text + .rodata + .data <= 96 KiB; static RAM = .data + .bss + .uninit <= 96 KiB: 32 KiB before the escape search's tree, which adds 34 KiB for 32 joints)"
 for elf in firmware/target/thumbv7em-none-eabihf/release/capp-firmware \
-           firmware/target/f446/thumbv7em-none-eabihf/release/capp-firmware; do
+           firmware/target/f446/thumbv7em-none-eabihf/f446/capp-firmware; do
   echo "$elf"
   size -A "$elf" | grep -E '^\.(vector_table|text|rodata|data|bss|uninit) '
   size -A "$elf" | awk -v elf="$elf" '

@@ -393,6 +393,10 @@ fn main() -> ! {
     if let Ok(scene) = scenes::pips_without_self_collision(8) {
         measure("pips_self_off", &scene, overhead, false, 0);
     }
+    // What the tracker costs (issue 22): the same PIPS + 8, a tracked tick.
+    if let Ok(scene) = scenes::pips_tracked(8) {
+        measure("pips_tracked", &scene, overhead, false, 0);
+    }
     // What each law costs: one step of PIPS with 8 obstacles from the same
     // warmed-up state (the default law's), `joints` = 18.
     if let Ok(snapshot) = scenes::pips(8).and_then(|s| scenes::warm_up(&s)) {

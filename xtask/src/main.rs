@@ -134,7 +134,7 @@ fn bench(quick: bool) -> Result<()> {
         let sizes = output(Command::new("size").arg("-A").arg(&elf))?;
         // The Nucleo-F446RE build: sizes only (no hardware here).
         run(Command::new(&cargo).current_dir(&firmware).args(["f446"]))?;
-        let f446_elf = firmware.join("target/f446/thumbv7em-none-eabihf/release/capp-firmware");
+        let f446_elf = firmware.join("target/f446/thumbv7em-none-eabihf/f446/capp-firmware");
         let f446_sizes = output(Command::new("size").arg("-A").arg(&f446_elf))?;
         let e2e = Command::new(&cargo)
             .current_dir(&root)

@@ -251,6 +251,16 @@ pub fn pips_without_self_collision(obstacles: usize) -> Result<Scene<PIPS_JOINTS
     pips_with(obstacles, settings(), false)
 }
 
+/// [`pips`] under the tracker (`Motion::Tracked`, issue 22): fixed ticks
+/// within the drive limits, each tick's stop cleared.
+pub fn pips_tracked(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let settings = Settings {
+        motion: capp_core::Motion::Tracked,
+        ..settings()
+    };
+    pips_with(obstacles, settings, true)
+}
+
 /// PIPS from home toward the payload-bay target with `obstacles` obstacles (at most 64).
 pub fn pips(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
     pips_with(obstacles, settings(), true)

@@ -76,6 +76,8 @@ impl<const N: usize> Planner<N> {
     /// `self.rate`), evaluated against `drive_target`; `settle`: toward
     /// rest. Counts the step. Returns whether the arm moved or was taken
     /// moving, the period (seconds) and the candidates refused.
+    // Not inlined: the tracked branch of the step, apart from the stepped one.
+    #[inline(never)]
     pub(super) fn tick<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,
@@ -135,6 +137,8 @@ impl<const N: usize> Planner<N> {
 
     /// A tick of the stop at the limits (nothing, at rest), evaluated
     /// against `target`.
+    // Not inlined: the search's hold and the tick's fallback share it.
+    #[inline(never)]
     pub(super) fn brake<const M: usize, const W: usize>(
         &mut self,
         scenario: &Scenario<N, M, W>,

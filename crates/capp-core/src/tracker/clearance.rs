@@ -43,6 +43,7 @@ pub const MAX_STOP_TICKS: usize = 128;
 /// within `fraction` of its gap, from the configuration of `frames`.
 /// `excursion` is scratch (one value per joint).
 #[allow(clippy::too_many_arguments)]
+#[inline(never)]
 pub fn stop_is_clear<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,

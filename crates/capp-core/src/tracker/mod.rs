@@ -88,6 +88,7 @@ impl<const N: usize> DriveState<N> {
     /// The next tick toward the velocities `target` (per second; each
     /// clamped to its rate limit), time-synchronised (module docs).
     /// `limits` and `target` hold one value per joint.
+    #[inline(never)]
     pub fn toward(&self, limits: &[DriveLimits], dt: f32, target: &[f32]) -> Self {
         let n = self.n.min(N);
         let mut next = *self;
@@ -129,6 +130,7 @@ impl<const N: usize> DriveState<N> {
     }
 
     /// The next tick of a stop at the limits: every joint brakes alone.
+    #[inline(never)]
     pub fn braking(&self, limits: &[DriveLimits], dt: f32) -> Self {
         let n = self.n.min(N);
         let mut next = *self;

@@ -52,7 +52,7 @@ use crate::tracker::limits::DriveLimits;
 /// The velocity change of taking `a` now and then ramping the acceleration
 /// back to zero at the jerk limit (`u = J dt` per tick), per second times
 /// seconds: `F(a)` of the module docs.
-#[inline]
+#[inline(never)]
 pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
     let x = a.abs();
     let m = libm::floorf(x / u);
@@ -66,7 +66,7 @@ pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
 
 /// The acceleration `a` with [`settle_change`]`(a) = e`: the time-optimal
 /// first move toward a velocity `e` away. Finite for finite `e`.
-#[inline]
+#[inline(never)]
 pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
     let x = e.abs() / (dt * u);
     // Largest m with m (m + 1) / 2 <= x.
@@ -84,7 +84,7 @@ pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
 /// limits: `(low, high)`. When rounding (or a state from outside the model)
 /// leaves it empty, the interval the jerk and acceleration limits allow,
 /// narrowed toward stopping.
-#[inline]
+#[inline(never)]
 pub fn viable(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
     let u = limits.max_jerk * dt;
     let jerk_low = (a - u).max(-limits.max_accel);
@@ -102,7 +102,7 @@ pub fn viable(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
 
 /// The acceleration that moves a joint toward the velocity `target` (per
 /// second) fastest, within [`viable`].
-#[inline]
+#[inline(never)]
 pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32 {
     let (low, high) = viable(v, a, limits, dt);
     let wanted = acceleration_for(target - v, limits.max_jerk * dt, dt);
@@ -113,7 +113,7 @@ pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32
 /// and acceleration `a` gets from where it is while it brakes to rest at its
 /// limits (the module docs), either way: the larger of [`stopping_span`]'s
 /// two sides.
-#[inline]
+#[inline(never)]
 pub fn stopping_travel(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
     let (below, above) = stopping_span(v, a, limits, dt);
     below.max(above)
@@ -124,7 +124,7 @@ pub fn stopping_travel(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
 /// forward bound on the side it moves to, and on the other side the way
 /// back when an acceleration against the motion is too large to take out
 /// before the velocity passes zero. Both include [`ROUNDING`].
-#[inline]
+#[inline(never)]
 pub fn stopping_span(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
     let down = v < 0.0 || (v == 0.0 && a < 0.0);
     let (w0, forward) = if down { (-v, -a) } else { (v, a) };
@@ -176,7 +176,7 @@ pub const ROUNDING: f32 = 1.0e-5;
 /// a phase at `-A`, which bounds the one without: `(x + 1) / 2 >= sqrt x`).
 /// The tracker's target near a goal or a joint limit, so the joint brakes
 /// in time instead of at the last tick.
-#[inline]
+#[inline(never)]
 pub fn braking_speed(room: f32, limits: &DriveLimits, dt: f32) -> f32 {
     if room.is_nan() || room <= 0.0 {
         return 0.0;
@@ -192,7 +192,7 @@ pub fn braking_speed(room: f32, limits: &DriveLimits, dt: f32) -> f32 {
 /// at most the ramp-out's: the first tick exactly, then (the ramp-out's
 /// speeds are convex in the tick) under the chord to its end speed
 /// `w0 + F(-d + u)` after `K = ceil(d / u)` ticks, then the stop from there.
-#[inline]
+#[inline(never)]
 fn decelerating(w0: f32, forward: f32, limits: &DriveLimits, dt: f32) -> f32 {
     let u = limits.max_jerk * dt;
     let first = (forward + u).min(0.0);
@@ -228,7 +228,7 @@ fn decelerating(w0: f32, forward: f32, limits: &DriveLimits, dt: f32) -> f32 {
 
 /// The continuous jerk-limited stop from speed `w` at zero acceleration:
 /// `w (w / A + A / J) / 2` with a phase at `-A`, `w sqrt(w / J)` without.
-#[inline]
+#[inline(never)]
 fn stop_from(w: f32, limits: &DriveLimits) -> f32 {
     let (jerk, accel) = (limits.max_jerk, limits.max_accel);
     if w * jerk >= accel * accel {
