@@ -1,6 +1,7 @@
 //! What a setpoint tells a drive (protocol 7): the joints' velocities and
 //! accelerations beside their positions, bit for bit the host planner's
-//! (tracked: `Planner::drive`; stepped: the step's rate and zeros), and the
+//! (`Planner::drive`: the tracker's state; stepped, the step's rate and its
+//! change over the step), and the
 //! tracked ticks whose work overran the control period, counted.
 
 use core::sync::atomic::{AtomicU32, Ordering};
@@ -35,18 +36,27 @@ fn host_rows(settings: capp_core::Settings) -> Vec<Row> {
     let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let row = |p: &Planner<32>, time_s: f32| -> Row {
-        let (velocity, acceleration) = if settings.motion == Motion::Tracked {
-            (bits(p.drive().velocity()), bits(p.drive().acceleration()))
-        } else {
-            (bits(p.rates()), std::vec![0; p.joints().len()])
-        };
-        (bits(p.joints()), velocity, acceleration, time_s.to_bits())
+        if settings.motion == Motion::Stepped {
+            // A stepped plan's velocity is its step's rate.
+            assert_eq!(bits(p.drive().velocity()), bits(p.rates()));
+        }
+        (
+            bits(p.joints()),
+            bits(p.drive().velocity()),
+            bits(p.drive().acceleration()),
+            time_s.to_bits(),
+        )
     };
     let mut out = std::vec![row(&planner, 0.0)];
     let mut time_s = 0.0f32;
     loop {
         let r = planner.step(&scenario).unwrap();
-        time_s += r.time_step_s;
+        // Tracked: the tick count times the period; stepped: the sum.
+        time_s = if settings.motion == Motion::Tracked {
+            r.step as f32 * settings.time_step_s
+        } else {
+            time_s + r.time_step_s
+        };
         out.push(row(&planner, time_s));
         if let Phase::Done(_) = r.phase {
             return out;
@@ -128,13 +138,13 @@ fn a_tracked_plan_streams_the_drive_state_bit_for_bit() {
 }
 
 #[test]
-fn a_stepped_plan_streams_its_rates_and_no_acceleration() {
+fn a_stepped_plan_streams_its_rates_and_their_change() {
     let settings = capp_core::Settings::default();
     let expected = host_rows(settings);
     let (rows, _) = board_rows(settings, None);
     assert_eq!(rows, expected);
-    assert!(rows.iter().all(|r| r.2.iter().all(|&a| a == 0)));
     assert!(rows.iter().skip(1).any(|r| r.1.iter().any(|&v| v != 0)));
+    assert!(rows.iter().skip(1).any(|r| r.2.iter().any(|&a| a != 0)));
 }
 
 /// Cycle counters for the overrun test: every reading `STEP` cycles after
