@@ -172,8 +172,6 @@ fn pips_between_random_configurations_keeps_its_links_apart() {
     use capp_core::pips;
     let joints = pips::joints();
     let mut rng = common::Rng(11);
-    let allowed: Vec<(u8, u8)> = pips::allowed_pairs().collect();
-    let radius = [pips::LINK_RADIUS; 18];
     let (mut runs, mut folded) = (0, 0);
     while runs < 10 {
         let start = common::random_config(&mut rng, &joints);
@@ -188,9 +186,7 @@ fn pips_between_random_configurations_keeps_its_links_apart() {
             &Mission::new(&[Waypoint::pose(p, r)], settings).unwrap(),
         )
         .unwrap();
-        let table =
-            PairTable::<18>::new(sc.robot(), &radius, &allowed, &pips::home(), SAMPLES, 1).unwrap();
-        sc.set_link_capsules(&radius, table.checked_rows()).unwrap();
+        common::pips_capsules(&mut sc);
         if Planner::new(&sc, &start).is_err() {
             continue; // a random start in self-collision: refused, not planned
         }

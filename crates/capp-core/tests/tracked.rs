@@ -7,7 +7,6 @@
 mod common;
 
 use capp_core::pips;
-use capp_core::self_collision::pairs::{PairTable, SAMPLES};
 use capp_core::tracker::limits::DriveLimits;
 use capp_core::{Mission, Motion, Outcome, Planner, Robot, Settings, SuperEllipsoid, Waypoint};
 use common::Sc;
@@ -74,8 +73,6 @@ fn tracked(mut settings: Settings) -> Settings {
 fn pips_between_random_configurations_moves_within_its_drive_limits() {
     let joints = pips::joints();
     let mut rng = common::Rng(5);
-    let allowed: Vec<(u8, u8)> = pips::allowed_pairs().collect();
-    let radius = [pips::LINK_RADIUS; 18];
     let (mut runs, mut reached) = (0, 0);
     while runs < 8 {
         let start = common::random_config(&mut rng, &joints);
@@ -95,9 +92,7 @@ fn pips_between_random_configurations_moves_within_its_drive_limits() {
             &Mission::new(&[Waypoint::pose(p, r)], settings).unwrap(),
         )
         .unwrap();
-        let table =
-            PairTable::<18>::new(sc.robot(), &radius, &allowed, &pips::home(), SAMPLES, 1).unwrap();
-        sc.set_link_capsules(&radius, table.checked_rows()).unwrap();
+        common::pips_capsules(&mut sc);
         if Planner::new(&sc, &start).is_err() {
             continue;
         }

@@ -52,6 +52,30 @@ pub const MAX_CLOSE_PAIRS: usize = 64;
 /// test ([`crate::tracker::clearance`]).
 pub type ClosePairs = heapless::Vec<LinkPair, MAX_CLOSE_PAIRS>;
 
+/// A measured pair: kept in `close` (the tracker bounds its relative
+/// motion) while there is room, else each of its links' rooms lowered to
+/// half its gap (and link `pressed`'s own room with it).
+fn keep_or_share(
+    close: &mut Option<&mut ClosePairs>,
+    room_sq: &mut [f32],
+    field: &mut SelfField,
+    pressed: usize,
+    pair: LinkPair,
+) {
+    if close.as_mut().is_some_and(|c| c.push(pair).is_ok()) {
+        return;
+    }
+    let share = 0.5 * max(pair.gap, 0.0);
+    for k in pair.links.map(usize::from) {
+        if let Some(room) = room_sq.get_mut(k) {
+            *room = min(*room, share * share);
+        }
+        if k == pressed {
+            field.pressed_room_sq = min(field.pressed_room_sq, share * share);
+        }
+    }
+}
+
 /// What the link pairs say about one configuration.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -161,26 +185,12 @@ pub fn link_pairs<const N: usize>(
                     // less the influence's share of the radii.
                     let inflation = INFLUENCE * CLEARANCE_SCALE * (r_a + r_b);
                     let gap = libm::sqrtf(centres_sq) - reach + inflation;
-                    let share = 0.5 * max(gap, 0.0);
-                    let kept = close.as_mut().is_some_and(|c| {
-                        c.push(LinkPair {
-                            clearance: f32::INFINITY,
-                            gap,
-                            links: [a as u8, b as u8],
-                        })
-                        .is_ok()
-                    });
-                    for k in [a, b] {
-                        if kept {
-                            break;
-                        }
-                        if let Some(room) = room_sq.get_mut(k) {
-                            *room = min(*room, share * share);
-                        }
-                        if k == pressed {
-                            field.pressed_room_sq = min(field.pressed_room_sq, share * share);
-                        }
-                    }
+                    let pair = LinkPair {
+                        clearance: f32::INFINITY,
+                        gap,
+                        links: [a as u8, b as u8],
+                    };
+                    keep_or_share(&mut close, room_sq, &mut field, pressed, pair);
                 }
                 continue;
             }
@@ -195,34 +205,15 @@ pub fn link_pairs<const N: usize>(
             let gap = distance - radii;
             let scale = CLEARANCE_SCALE * radii;
             let c = gap / scale;
-            let share = 0.5 * max(gap, 0.0);
-            let kept = close.as_mut().is_some_and(|close| {
-                close
-                    .push(LinkPair {
-                        clearance: c,
-                        gap,
-                        links: [a as u8, b as u8],
-                    })
-                    .is_ok()
-            });
-            for k in [a, b] {
-                if kept {
-                    break;
-                }
-                if let Some(room) = room_sq.get_mut(k) {
-                    *room = min(*room, share * share);
-                }
-                if k == pressed {
-                    field.pressed_room_sq = min(field.pressed_room_sq, share * share);
-                }
-            }
+            let measured = LinkPair {
+                clearance: c,
+                gap,
+                links: [a as u8, b as u8],
+            };
+            keep_or_share(&mut close, room_sq, &mut field, pressed, measured);
             if c < closest {
                 closest = c;
-                field.closest = Some(LinkPair {
-                    clearance: c,
-                    gap,
-                    links: [a as u8, b as u8],
-                });
+                field.closest = Some(measured);
             }
             if gap <= 0.0 || distance <= 0.0 {
                 field.clear = false;

@@ -473,3 +473,15 @@ pub fn miss(joints: &[Joint], q: &[f32], target: [f32; 3]) -> f32 {
         .sum::<f32>()
         .sqrt()
 }
+
+/// Gives `sc` (PIPS) its capsules and the pairs checked with its pedestal
+/// group and knuckles allowed, as the host's PIPS preset does.
+pub fn pips_capsules(sc: &mut Sc) {
+    use capp_core::pips;
+    use capp_core::self_collision::pairs::{PairTable, SAMPLES};
+    let allowed: Vec<(u8, u8)> = pips::allowed_pairs().collect();
+    let radius = [pips::LINK_RADIUS; 18];
+    let table =
+        PairTable::<18>::new(sc.robot(), &radius, &allowed, &pips::home(), SAMPLES, 1).unwrap();
+    sc.set_link_capsules(&radius, table.checked_rows()).unwrap();
+}
