@@ -352,14 +352,10 @@ pub fn potential_gradient<const N: usize>(
         }),
         active_pairs: active_pairs.min(u16::MAX as u32) as u16,
         clear,
-        // The nearest link's plane is among `planes` when they were made.
         nearest: nearest.and_then(|(link, point, obstacle, others_sq)| {
-            match planes.as_ref().and_then(|p| p.get(link as usize)) {
-                Some(plane) => *plane,
-                None => half_space(
-                    frames, obstacles, settings, link, point, obstacle, others_sq,
-                ),
-            }
+            half_space(
+                frames, obstacles, settings, link, point, obstacle, others_sq,
+            )
         }),
     }
 }
