@@ -9,12 +9,15 @@
 //!    the braking approach that arrives at rest; and each joint slowed
 //!    alone so it can stop before its limit. At the final target, within
 //!    tolerance, the target is rest.
-//! 2. **Candidates**: the tracker's next tick toward that target, then
-//!    toward a half and a quarter of it. A joint whose stop would leave its
-//!    range brakes instead. A candidate is taken when every joint's
-//!    excursion (this tick's motion and the stop after it) keeps every link
-//!    within its room ([`crate::tracker::clearance`]) and the configuration
-//!    it reaches is clear and not creeping onto a surface.
+//! 2. **Candidates**: the tracker's next tick toward that target; a
+//!    refused one is tried again toward a share of it: at most half, and
+//!    no more than the room the refused one left allows ([`stop_margin`]),
+//!    so a tick pressed against a surface can still creep along it; at most
+//!    [`MAX_TRIES`] in all. A joint whose stop would leave its range brakes
+//!    instead. A candidate is taken when every joint's excursion (this
+//!    tick's motion and the stop after it) keeps every link within its room
+//!    ([`crate::tracker::clearance`]) and the configuration it reaches is
+//!    clear and not creeping onto a surface.
 //! 3. **Otherwise brake**: the next tick of the stop the last taken tick
 //!    cleared (at rest: stay). A tick that neither moved nor could move is
 //!    refused, and the planner treats it as a dead end, as a refused step.
@@ -27,12 +30,23 @@ use crate::planner::waypoints;
 use crate::projection::CONTACT_FLOOR;
 use crate::scenario::Scenario;
 use crate::target::Target;
-use crate::tracker::clearance::stop_is_clear;
+use crate::tracker::clearance::stop_margin;
 use crate::tracker::profile::{braking_speed, stopping_span};
 use crate::tracker::DriveState;
 
-/// Fractions of the velocity target tried before braking.
-const TRIES: [f32; 3] = [1.0, 0.5, 0.25];
+/// Most candidates a tick tries before braking.
+const MAX_TRIES: usize = 3;
+
+/// A refused candidate's margin ([`stop_margin`]) times this bounds the next
+/// candidate's share of the last one's velocity target ...
+const SHARE_BACKOFF: f32 = 0.9;
+
+/// ... as does this: each try at least halves it.
+const MAX_SHARE_STEP: f32 = 0.5;
+
+/// No candidate slower than this share of the velocity target is tried
+/// (the tick brakes instead).
+const MIN_SHARE: f32 = 1.0 / 1024.0;
 
 /// A joint is at rest when its speed is below this fraction of its rate
 /// limit (and its acceleration below this fraction of its limit).
@@ -98,13 +112,14 @@ impl<const N: usize> Planner<N> {
         let fraction = settings.avoidance.advance_fraction;
         let mut excursion = [0.0f32; N];
         let mut refused = 0u8;
-        for &share in &TRIES {
+        let mut share = 1.0f32;
+        for _ in 0..MAX_TRIES {
             let mut target = self.velocity_target;
             target[..n].iter_mut().for_each(|t| *t *= share);
             let mut next = self.drive.toward(limits, dt, &target[..n]);
             self.keep_in_range(scenario, &mut next);
             let now = self.evals.now();
-            if stop_is_clear(
+            let margin = stop_margin(
                 robot,
                 &now.frames,
                 &now.distance_sq[..n],
@@ -115,7 +130,8 @@ impl<const N: usize> Planner<N> {
                 dt,
                 fraction,
                 &mut excursion[..n],
-            ) {
+            );
+            if margin >= 1.0 {
                 next.advance(&self.q[..n], dt, &mut self.q_next[..n]);
                 self.clamp_next(scenario);
                 self.evals
@@ -126,8 +142,18 @@ impl<const N: usize> Planner<N> {
                     self.commit(next);
                     return (true, dt, refused);
                 }
+                share *= MAX_SHARE_STEP;
+            } else {
+                // A stop's travel grows at least linearly with the share,
+                // so the margin's share of this one is the most that could
+                // fit (less what the current motion cannot shed in one tick:
+                // the backoff), and each try at least halves.
+                share *= min(margin * SHARE_BACKOFF, MAX_SHARE_STEP);
             }
             refused = refused.saturating_add(1);
+            if share < MIN_SHARE {
+                break;
+            }
         }
         // Brake: the stop the last tick cleared.
         let moving = !self.drive.is_at_rest(limits, 0.0);

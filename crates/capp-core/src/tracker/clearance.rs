@@ -43,7 +43,6 @@ pub const MAX_STOP_TICKS: usize = 128;
 /// within `fraction` of its gap, from the configuration of `frames`.
 /// `excursion` is scratch (one value per joint).
 #[allow(clippy::too_many_arguments)]
-#[inline(never)]
 pub fn stop_is_clear<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
@@ -56,6 +55,40 @@ pub fn stop_is_clear<const N: usize>(
     fraction: f32,
     excursion: &mut [f32],
 ) -> bool {
+    stop_margin(
+        robot,
+        frames,
+        distance_sq,
+        planes,
+        pairs,
+        after,
+        limits,
+        dt,
+        fraction,
+        excursion,
+    ) >= 1.0
+}
+
+/// How much room the tick to `after` and the stop from there leave: the
+/// least, over every link and pair of [`stop_is_clear`]'s test, of the room
+/// it may use over the travel bound it needs (at least 1: clear; 0 for a
+/// stop that does not end within [`MAX_STOP_TICKS`], a room already used
+/// up, or a value that is not a number). The tick chooses how far to slow
+/// its velocity target from it ([`crate::planner`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+pub fn stop_margin<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    distance_sq: &[f32],
+    planes: &[Option<HalfSpace>],
+    pairs: &[LinkPair],
+    after: &DriveState<N>,
+    limits: &[DriveLimits],
+    dt: f32,
+    fraction: f32,
+    excursion: &mut [f32],
+) -> f32 {
     let n = robot
         .len()
         .min(N)
@@ -114,13 +147,14 @@ pub fn stop_is_clear<const N: usize>(
         }
         ticks += 1;
         if ticks > MAX_STOP_TICKS {
-            return false;
+            return 0.0;
         }
         state = state.braking(limits, dt);
     }
     excursion[..n].copy_from_slice(&largest[..n]);
     // Second order: Q_k of the largest excursions (step_size's sums).
-    let fraction_sq = fraction * fraction;
+    // The least room over need, squared (a NaN anywhere gives 0).
+    let mut least_sq = f32::INFINITY;
     let mut phi = 0.0f32;
     let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
     let mut pivot_chain = 0.0f32;
@@ -143,28 +177,58 @@ pub fn stop_is_clear<const N: usize>(
         pivot_chain = link.chain;
         let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let travel = f + second;
-        let sliding_ok = planes.get(k).copied().flatten().and_then(|h| {
+        let travel_sq = travel * travel;
+        let sliding_sq = planes.get(k).copied().flatten().and_then(|h| {
             let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
             let rooms = [frames.pivot(k), frames.link_end(k)].map(|p| normal.dot(&p) - h.offset);
             if !rooms.iter().all(|&r| r > 0.0) {
                 return None;
             }
             let toward = toward.get(k).copied().unwrap_or([f32::INFINITY; 2]);
-            let toward_ok = toward
-                .iter()
-                .zip(rooms)
-                .all(|(&t, room)| t + second <= fraction * room);
-            Some(toward_ok && travel * travel <= fraction_sq * h.others_sq)
+            let mut ratio_sq = ratio_sq(h.others_sq, travel_sq);
+            for (&t, room) in toward.iter().zip(rooms) {
+                let need = t + second;
+                ratio_sq = least(ratio_sq, ratio_sq_of(room, need));
+            }
+            Some(ratio_sq)
         });
-        // Not `<=` on a NaN: a bad value is never clear.
-        let ok = sliding_ok.unwrap_or(travel * travel <= fraction_sq * d_sq);
-        if !ok {
-            return false;
-        }
+        let link_sq = sliding_sq.unwrap_or_else(|| ratio_sq(d_sq, travel_sq));
+        least_sq = least(least_sq, link_sq);
     }
-    pairs.iter().zip(&relative).all(|(pair, &rel)| {
-        rel + between(robot, &largest[..n], pair.links) <= fraction * max(pair.gap, 0.0)
-    })
+    for (pair, &rel) in pairs.iter().zip(&relative) {
+        let need = rel + between(robot, &largest[..n], pair.links);
+        least_sq = least(least_sq, ratio_sq_of(max(pair.gap, 0.0), need));
+    }
+    fraction * libm::sqrtf(least_sq)
+}
+
+/// `room_sq / need_sq` (infinity for no need, 0 for a NaN).
+fn ratio_sq(room_sq: f32, need_sq: f32) -> f32 {
+    if need_sq == 0.0 && room_sq >= 0.0 {
+        return f32::INFINITY;
+    }
+    let r = room_sq / need_sq;
+    if r >= 0.0 {
+        r
+    } else {
+        0.0
+    }
+}
+
+/// [`ratio_sq`] of a room and a need given unsquared.
+fn ratio_sq_of(room: f32, need: f32) -> f32 {
+    ratio_sq(room * room, need * need)
+}
+
+/// The smaller of two ratios; 0 when either is not a number.
+fn least(a: f32, b: f32) -> f32 {
+    if a <= b {
+        a
+    } else if b <= a {
+        b
+    } else {
+        0.0
+    }
 }
 
 /// The second-order bound `Q` of link `b`'s travel when only the joints

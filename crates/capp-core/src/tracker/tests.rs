@@ -491,3 +491,94 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
         "{refused} links, {pairs_refused} pairs tested"
     );
 }
+
+/// [`stop_margin`](super::clearance::stop_margin) is the room the test
+/// needs, as a ratio: with every room scaled by `1 / margin` (a hair more)
+/// the same tick and stop are cleared, and with a hair less refused, for a
+/// link's own room and for a pair's gap alike. The tick sizes its next
+/// candidate from it.
+#[test]
+fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
+    use super::clearance::{stop_is_clear, stop_margin};
+    use crate::kinematics::{forward_kinematics, Frames};
+    use crate::self_collision::field::LinkPair;
+    const N: usize = 8;
+    let mut rng = Rng::seeded(29, &[]);
+    let mut tested = 0;
+    for _ in 0..120 {
+        let n = 3 + (range(&mut rng, 0.0, 5.0) as usize);
+        let joints = random_chain(&mut rng, n);
+        let robot = crate::Robot::<N>::new(&joints).unwrap();
+        let limits: Vec<DriveLimits> = joints
+            .iter()
+            .map(|j| DriveLimits::from_rate(j.max_rate))
+            .collect();
+        let q: Vec<f32> = (0..n).map(|_| rng.uniform() * 2.0).collect();
+        let dt = 0.05;
+        let mut after = DriveState::<N>::at_rest(n);
+        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
+        for _ in 0..(1 + range(&mut rng, 0.0, 15.0) as usize) {
+            after = after.toward(&limits, dt, &target);
+        }
+        let mut frames = Frames::<N>::default();
+        forward_kinematics(&robot, &q, &mut frames);
+        let mut rooms = [0.0f32; N];
+        for r in rooms[..n].iter_mut() {
+            *r = range(&mut rng, 0.01, 0.5);
+        }
+        let gap = range(&mut rng, 0.01, 0.5);
+        let pair = [LinkPair {
+            clearance: 1.0,
+            gap,
+            links: [0, (n - 1) as u8],
+        }];
+        let fraction = range(&mut rng, 0.3, 1.0);
+        let mut scratch = [0.0f32; N];
+        let check = |scale: f32, scratch: &mut [f32]| {
+            let rooms_sq: Vec<f32> = rooms[..n].iter().map(|r| (r * scale).powi(2)).collect();
+            let scaled = [LinkPair {
+                gap: gap * scale,
+                ..pair[0]
+            }];
+            stop_is_clear(
+                &robot,
+                &frames,
+                &rooms_sq,
+                &[None; N][..n],
+                &scaled,
+                &after,
+                &limits,
+                dt,
+                fraction,
+                scratch,
+            )
+        };
+        let rooms_sq: Vec<f32> = rooms[..n].iter().map(|r| r * r).collect();
+        let margin = stop_margin(
+            &robot,
+            &frames,
+            &rooms_sq,
+            &[None; N][..n],
+            &pair,
+            &after,
+            &limits,
+            dt,
+            fraction,
+            &mut scratch[..n],
+        );
+        assert!(margin >= 0.0, "margin {margin}");
+        if !(margin > 1e-3 && margin < 1e3) {
+            continue;
+        }
+        assert!(
+            check(1.001 / margin, &mut scratch[..n]),
+            "margin {margin}: not cleared with the room it names"
+        );
+        assert!(
+            !check(0.999 / margin, &mut scratch[..n]),
+            "margin {margin}: cleared with less room than it names"
+        );
+        tested += 1;
+    }
+    assert!(tested > 80, "{tested} states tested");
+}
