@@ -139,7 +139,7 @@ impl<const N: usize> DriveState<N> {
             .zip(&mut next.acceleration[..n])
             .zip(limits)
         {
-            *a = profile::toward(*v, *a, 0.0, l, dt);
+            *a = profile::braking(*v, *a, l, dt);
             *v += *a * dt;
         }
         next
@@ -175,7 +175,7 @@ impl<const N: usize> DriveState<N> {
             from.velocity.get(j),
             from.acceleration.get(j),
         ) {
-            *a = profile::toward(v0, a0, 0.0, limits, dt);
+            *a = profile::braking(v0, a0, limits, dt);
             *v = v0 + *a * dt;
         }
     }

@@ -109,6 +109,23 @@ pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32
     wanted.max(low).min(high)
 }
 
+/// The acceleration of a joint's next tick of braking to rest: [`toward`]
+/// velocity 0, in one [`acceleration_for`] instead of three. Toward rest
+/// the stop limits of [`viable`] never bind: `F(a') = -v` lies within
+/// `[-V - v, V - v]`, so the move is `F^-1(-v)` within the jerk and
+/// acceleration limits alone (and where [`viable`] is empty, that is the
+/// side it brakes to as well).
+#[inline(never)]
+pub fn braking(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
+    if v == 0.0 && a == 0.0 {
+        return 0.0;
+    }
+    let u = limits.max_jerk * dt;
+    let low = (a - u).max(-limits.max_accel);
+    let high = (a + u).min(limits.max_accel);
+    acceleration_for(-v, u, dt).max(low).min(high)
+}
+
 /// A bound on how far (length units or radians) a joint at velocity `v`
 /// and acceleration `a` gets from where it is while it brakes to rest at its
 /// limits (the module docs), either way: the larger of [`stopping_span`]'s

@@ -582,3 +582,36 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
     }
     assert!(tested > 80, "{tested} states tested");
 }
+
+/// [`profile::braking`] is [`profile::toward`] velocity 0, to the bit, on
+/// every state the model reaches (random moves toward random velocities
+/// from rest), for random limits.
+#[test]
+fn braking_is_the_move_toward_rest() {
+    use super::profile;
+    let mut rng = Rng::seeded(31, &[]);
+    let mut compared = 0;
+    for _ in 0..200 {
+        let l = DriveLimits {
+            max_rate: range(&mut rng, 0.1, 4.0),
+            max_accel: range(&mut rng, 0.2, 20.0),
+            max_jerk: range(&mut rng, 1.0, 400.0),
+        };
+        let dt = range(&mut rng, 0.001, 0.1);
+        let (mut v, mut a) = (0.0f32, 0.0f32);
+        for _ in 0..40 {
+            let target = range(&mut rng, -1.2, 1.2) * l.max_rate;
+            a = profile::toward(v, a, target, &l, dt);
+            v += a * dt;
+            let fast = profile::braking(v, a, &l, dt);
+            let slow = profile::toward(v, a, 0.0, &l, dt);
+            assert_eq!(
+                fast.to_bits(),
+                slow.to_bits(),
+                "v {v} a {a} {l:?} dt {dt}: {fast} != {slow}"
+            );
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 8000);
+}
