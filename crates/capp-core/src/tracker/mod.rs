@@ -92,38 +92,46 @@ impl<const N: usize> DriveState<N> {
     pub fn toward(&self, limits: &[DriveLimits], dt: f32, target: &[f32]) -> Self {
         let n = self.n.min(N);
         let mut next = *self;
-        // The fraction of its velocity error each joint could remove alone.
+        // Per joint: its own best move toward its target and its viable
+        // interval ([`profile::toward`]'s parts, kept for the second pass),
+        // and the fraction of its velocity error it could remove alone.
+        let mut alone = [0.0f32; N];
+        let mut low = [0.0f32; N];
+        let mut high = [0.0f32; N];
         let mut rho = 1.0f32;
-        for (((&v, &a), l), &t) in self.velocity[..n]
+        for ((((&v, &a), l), &t), (own, (lo, hi))) in self.velocity[..n]
             .iter()
             .zip(&self.acceleration[..n])
             .zip(limits)
             .zip(target)
+            .zip(alone.iter_mut().zip(low.iter_mut().zip(high.iter_mut())))
         {
             let e = clamp_rate(t, l) - v;
+            (*lo, *hi) = profile::viable(v, a, l, dt);
+            let wanted = profile::acceleration_for((v + e) - v, l.max_jerk * dt, dt);
+            *own = wanted.max(*lo).min(*hi);
             if e.abs() > SETTLED * l.max_rate {
-                let alone = profile::toward(v, a, v + e, l, dt) * dt / e;
-                if alone > 0.0 {
-                    rho = rho.min(alone);
+                let fraction = *own * dt / e;
+                if fraction > 0.0 {
+                    rho = rho.min(fraction);
                 }
             }
         }
-        for ((((v, a), l), &t), (&v0, &a0)) in next.velocity[..n]
+        for (((((v, a), l), &t), (&v0, own)), (&lo, &hi)) in next.velocity[..n]
             .iter_mut()
             .zip(&mut next.acceleration[..n])
             .zip(limits)
             .zip(target)
-            .zip(self.velocity[..n].iter().zip(&self.acceleration[..n]))
+            .zip(self.velocity[..n].iter().zip(&alone))
+            .zip(low.iter().zip(&high))
         {
             let e = clamp_rate(t, l) - v0;
-            let alone = profile::toward(v0, a0, v0 + e, l, dt);
-            let (low, high) = profile::viable(v0, a0, l, dt);
-            let synced = if alone * e > 0.0 {
-                (rho * e / dt).max(low).min(high)
+            let synced = if own * e > 0.0 {
+                (rho * e / dt).max(lo).min(hi)
             } else {
-                alone
+                *own
             };
-            *a = if synced.is_finite() { synced } else { low };
+            *a = if synced.is_finite() { synced } else { lo };
             *v = v0 + *a * dt;
         }
         next
