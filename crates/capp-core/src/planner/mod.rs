@@ -76,6 +76,10 @@ pub struct Planner<const N: usize> {
     drive: DriveState<N>,
     /// The velocities the tracker moves toward this tick.
     velocity_target: [f32; N],
+    /// The share of its velocity target the last tick moved toward (or, if
+    /// it braked, the next share it would have tried); the next tick starts
+    /// from it, grown ([`Motion::Tracked`]).
+    share: f32,
 }
 
 impl<const N: usize> Planner<N> {
@@ -109,6 +113,7 @@ impl<const N: usize> Planner<N> {
             last: StepReport::at_start(Phase::Done(Outcome::Stalled)),
             drive: DriveState::at_rest(0),
             velocity_target: [0.0; N],
+            share: 1.0,
         };
         planner.reset(&[]);
         planner

@@ -97,6 +97,7 @@ impl<const N: usize> Planner<N> {
             last,
             drive,
             velocity_target,
+            share,
         } = self;
         let len = start.len().min(N);
         *n = len;
@@ -118,5 +119,6 @@ impl<const N: usize> Planner<N> {
         *last = StepReport::at_start(*phase);
         *drive = DriveState::at_rest(len);
         velocity_target.fill(0.0);
+        *share = 1.0;
     }
 }

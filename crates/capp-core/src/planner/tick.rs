@@ -44,6 +44,12 @@ const SHARE_BACKOFF: f32 = 0.9;
 /// ... as does this: each try at least halves it.
 const MAX_SHARE_STEP: f32 = 0.5;
 
+/// A tick's first candidate moves toward this times the last tick's share
+/// (at most all) of its velocity target: near a surface the speed the room
+/// allows changes little from tick to tick, and starting there spares the
+/// refused candidates (and the braking between them) of starting at full.
+const SHARE_GROWTH: f32 = 2.0;
+
 /// No candidate slower than this share of the velocity target is tried
 /// (the tick brakes instead).
 const MIN_SHARE: f32 = 1.0 / 1024.0;
@@ -112,7 +118,7 @@ impl<const N: usize> Planner<N> {
         let fraction = settings.avoidance.advance_fraction;
         let mut excursion = [0.0f32; N];
         let mut refused = 0u8;
-        let mut share = 1.0f32;
+        let mut share = min(self.share * SHARE_GROWTH, 1.0).max(MIN_SHARE);
         for _ in 0..MAX_TRIES {
             let mut target = self.velocity_target;
             target[..n].iter_mut().for_each(|t| *t *= share);
@@ -139,6 +145,7 @@ impl<const N: usize> Planner<N> {
                     .evaluate(scenario, &self.q_next[..n], drive_target);
                 let (now, candidate) = (self.evals.now(), self.evals.next());
                 if candidate.safe_after(now.closest(), floor) && all_finite(&self.q_next[..n]) {
+                    self.share = share;
                     self.commit(next);
                     return (true, dt, refused);
                 }
@@ -155,6 +162,7 @@ impl<const N: usize> Planner<N> {
                 break;
             }
         }
+        self.share = share;
         // Brake: the stop the last tick cleared.
         let moving = !self.drive.is_at_rest(limits, 0.0);
         self.brake(scenario, drive_target);
