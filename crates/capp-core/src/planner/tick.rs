@@ -48,7 +48,7 @@ const MAX_SHARE_STEP: f32 = 0.5;
 /// (at most all) of its velocity target: near a surface the speed the room
 /// allows changes little from tick to tick, and starting there spares the
 /// refused candidates (and the braking between them) of starting at full.
-const SHARE_GROWTH: f32 = 2.0;
+const SHARE_GROWTH: f32 = 1.25;
 
 /// No candidate slower than this share of the velocity target is tried
 /// (the tick brakes instead).
