@@ -116,7 +116,6 @@ impl<const N: usize> Planner<N> {
         self.velocity_target(scenario, proposal, settle);
         let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
         let fraction = settings.avoidance.advance_fraction;
-        let mut excursion = [0.0f32; N];
         let mut refused = 0u8;
         let mut share = min(self.share * SHARE_GROWTH, 1.0).max(MIN_SHARE);
         for _ in 0..MAX_TRIES {
@@ -135,7 +134,6 @@ impl<const N: usize> Planner<N> {
                 limits,
                 dt,
                 fraction,
-                &mut excursion[..n],
             );
             if margin >= 1.0 {
                 next.advance(&self.q[..n], dt, &mut self.q_next[..n]);

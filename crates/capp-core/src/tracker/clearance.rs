@@ -29,7 +29,7 @@ use super::limits::DriveLimits;
 use super::DriveState;
 use crate::avoidance::HalfSpace;
 use crate::kinematics::Frames;
-use crate::math::{max, Vec3};
+use crate::math::{max, min, Vec3};
 use crate::robot::{JointKind, Robot};
 use crate::self_collision::field::{LinkPair, MAX_CLOSE_PAIRS};
 
@@ -41,7 +41,6 @@ pub const MAX_STOP_TICKS: usize = 128;
 /// stop from there keep every link within `fraction` of its room
 /// (`distance_sq`, its square, one per link) and every pair of `pairs`
 /// within `fraction` of its gap, from the configuration of `frames`.
-/// `excursion` is scratch (one value per joint).
 #[allow(clippy::too_many_arguments)]
 pub fn stop_is_clear<const N: usize>(
     robot: &Robot<N>,
@@ -53,7 +52,6 @@ pub fn stop_is_clear<const N: usize>(
     limits: &[DriveLimits],
     dt: f32,
     fraction: f32,
-    excursion: &mut [f32],
 ) -> bool {
     stop_margin(
         robot,
@@ -65,7 +63,6 @@ pub fn stop_is_clear<const N: usize>(
         limits,
         dt,
         fraction,
-        excursion,
     ) >= 1.0
 }
 
@@ -87,13 +84,8 @@ pub fn stop_margin<const N: usize>(
     limits: &[DriveLimits],
     dt: f32,
     fraction: f32,
-    excursion: &mut [f32],
 ) -> f32 {
-    let n = robot
-        .len()
-        .min(N)
-        .min(distance_sq.len())
-        .min(excursion.len());
+    let n = robot.len().min(N).min(distance_sq.len());
     let mut first = [0.0f32; N];
     let mut relative = [0.0f32; MAX_CLOSE_PAIRS];
     let mut turn = [Vec3::zeros(); N];
@@ -151,7 +143,6 @@ pub fn stop_margin<const N: usize>(
         }
         state = state.braking(limits, dt);
     }
-    excursion[..n].copy_from_slice(&largest[..n]);
     // Second order: Q_k of the largest excursions (step_size's sums).
     // The least room over need, squared (a NaN anywhere gives 0).
     let mut least_sq = f32::INFINITY;
@@ -178,57 +169,45 @@ pub fn stop_margin<const N: usize>(
         let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let travel = f + second;
         let travel_sq = travel * travel;
-        let sliding_sq = planes.get(k).copied().flatten().and_then(|h| {
+        let mut slid = false;
+        if let Some(h) = planes.get(k).copied().flatten() {
             let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
             let rooms = [frames.pivot(k), frames.link_end(k)].map(|p| normal.dot(&p) - h.offset);
-            if !rooms.iter().all(|&r| r > 0.0) {
-                return None;
+            if rooms.iter().all(|&r| r > 0.0) {
+                slid = true;
+                lower(&mut least_sq, h.others_sq, travel_sq);
+                let toward = toward.get(k).copied().unwrap_or([f32::INFINITY; 2]);
+                for (&t, room) in toward.iter().zip(rooms) {
+                    let need = t + second;
+                    lower(&mut least_sq, room * room, need * need);
+                }
             }
-            let toward = toward.get(k).copied().unwrap_or([f32::INFINITY; 2]);
-            let mut ratio_sq = ratio_sq(h.others_sq, travel_sq);
-            for (&t, room) in toward.iter().zip(rooms) {
-                let need = t + second;
-                ratio_sq = least(ratio_sq, ratio_sq_of(room, need));
-            }
-            Some(ratio_sq)
-        });
-        let link_sq = sliding_sq.unwrap_or_else(|| ratio_sq(d_sq, travel_sq));
-        least_sq = least(least_sq, link_sq);
+        }
+        if !slid {
+            lower(&mut least_sq, d_sq, travel_sq);
+        }
     }
     for (pair, &rel) in pairs.iter().zip(&relative) {
         let need = rel + between(robot, &largest[..n], pair.links);
-        least_sq = least(least_sq, ratio_sq_of(max(pair.gap, 0.0), need));
+        let gap = max(pair.gap, 0.0);
+        lower(&mut least_sq, gap * gap, need * need);
     }
     fraction * libm::sqrtf(least_sq)
 }
 
-/// `room_sq / need_sq` (infinity for no need, 0 for a NaN).
-fn ratio_sq(room_sq: f32, need_sq: f32) -> f32 {
+/// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
+/// a NaN, so a bad value is never clear).
+#[inline(never)]
+fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) {
     if need_sq == 0.0 && room_sq >= 0.0 {
-        return f32::INFINITY;
+        return;
     }
-    let r = room_sq / need_sq;
-    if r >= 0.0 {
-        r
+    let ratio = room_sq / need_sq;
+    *least_sq = if ratio >= 0.0 {
+        min(*least_sq, ratio)
     } else {
         0.0
-    }
-}
-
-/// [`ratio_sq`] of a room and a need given unsquared.
-fn ratio_sq_of(room: f32, need: f32) -> f32 {
-    ratio_sq(room * room, need * need)
-}
-
-/// The smaller of two ratios; 0 when either is not a number.
-fn least(a: f32, b: f32) -> f32 {
-    if a <= b {
-        a
-    } else if b <= a {
-        b
-    } else {
-        0.0
-    }
+    };
 }
 
 /// The second-order bound `Q` of link `b`'s travel when only the joints

@@ -422,7 +422,6 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
                 relative = relative.max((p1 - p0).norm());
             }
         }
-        let mut scratch = [0.0f32; N];
         let roomy = [f32::INFINITY; N];
         assert!(stop_is_clear(
             &robot,
@@ -433,8 +432,7 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
             &after,
             &limits,
             dt,
-            1.0,
-            &mut scratch[..n]
+            1.0
         ));
         for k in 0..n {
             if travel[k] < 1e-4 {
@@ -452,8 +450,7 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
                     &after,
                     &limits,
                     dt,
-                    1.0,
-                    &mut scratch[..n]
+                    1.0
                 ),
                 "link {k} goes {} but was cleared with room {}",
                 travel[k],
@@ -477,8 +474,7 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
                     &after,
                     &limits,
                     dt,
-                    1.0,
-                    &mut scratch[..n]
+                    1.0
                 ),
                 "link {b} moves {relative} against link {a} but was cleared with gap {}",
                 0.99 * relative
@@ -533,8 +529,7 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
             links: [0, (n - 1) as u8],
         }];
         let fraction = range(&mut rng, 0.3, 1.0);
-        let mut scratch = [0.0f32; N];
-        let check = |scale: f32, scratch: &mut [f32]| {
+        let check = |scale: f32| {
             let rooms_sq: Vec<f32> = rooms[..n].iter().map(|r| (r * scale).powi(2)).collect();
             let scaled = [LinkPair {
                 gap: gap * scale,
@@ -550,7 +545,6 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
                 &limits,
                 dt,
                 fraction,
-                scratch,
             )
         };
         let rooms_sq: Vec<f32> = rooms[..n].iter().map(|r| r * r).collect();
@@ -564,18 +558,17 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
             &limits,
             dt,
             fraction,
-            &mut scratch[..n],
         );
         assert!(margin >= 0.0, "margin {margin}");
         if !(margin > 1e-3 && margin < 1e3) {
             continue;
         }
         assert!(
-            check(1.001 / margin, &mut scratch[..n]),
+            check(1.001 / margin),
             "margin {margin}: not cleared with the room it names"
         );
         assert!(
-            !check(0.999 / margin, &mut scratch[..n]),
+            !check(0.999 / margin),
             "margin {margin}: cleared with less room than it names"
         );
         tested += 1;
