@@ -122,6 +122,46 @@ pub fn stiffness_bound(stiffness: f32) -> f32 {
     }
 }
 
+/// The second-order bound `Q_k` of the module docs, grown a joint at a time
+/// (Phi_<m and the sums giving `Q_k`: sum a_m, sum a_m L_0m, the prismatic
+/// sum): [`SecondOrder::link`] adds joint `k` moving by at most `size` and
+/// gives `Q_k` of its link. The tracker's stop test uses the same sums
+/// ([`crate::tracker::clearance`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SecondOrder {
+    phi: f32,
+    lever_sum: f32,
+    lever_base: f32,
+    sliding: f32,
+    pivot_chain: f32,
+}
+
+impl SecondOrder {
+    /// Joint `kind` moving by at most `size` (radians or length units),
+    /// then `Q_k` of its link, whose chain length is `chain`.
+    #[inline(always)]
+    pub(crate) fn link(&mut self, kind: JointKind, size: f32, chain: f32) -> f32 {
+        match kind {
+            JointKind::Revolute => {
+                let a = size * (2.0 * self.phi + size);
+                self.lever_sum += a;
+                self.lever_base += a * self.pivot_chain;
+                self.phi += size;
+            }
+            JointKind::Prismatic => self.sliding += size * self.phi,
+        }
+        self.still(chain)
+    }
+
+    /// `Q_k` of the next link (chain length `chain`) when its joint does
+    /// not move.
+    #[inline(always)]
+    pub(crate) fn still(&mut self, chain: f32) -> f32 {
+        self.pivot_chain = chain;
+        max(0.5 * (chain * self.lever_sum - self.lever_base), 0.0) + self.sliding
+    }
+}
+
 /// Conservative advancement (module docs): the largest `h' <= h` for which no
 /// avoidance point of any link travels more than `fraction` of that link's
 /// obstacle distance (`distance_sq`, its square, one per link) when the
@@ -149,10 +189,7 @@ pub fn advancement<const N: usize>(
     // The velocity field of the links so far: v(x) = w x x + b, per unit s.
     let mut w = Vec3::zeros();
     let mut b = Vec3::zeros();
-    // Phi_<m, and the sums giving Q_k: sum a_m, sum a_m L_0m, the prismatic sum.
-    let mut phi = 0.0f32;
-    let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
-    let mut pivot_chain = 0.0f32;
+    let mut q_sums = SecondOrder::default();
     let mut start_v = Vec3::zeros();
     let mut scale = 1.0f32;
     let fraction_sq = fraction * fraction;
@@ -170,20 +207,12 @@ pub fn advancement<const N: usize>(
             JointKind::Revolute => {
                 w += z * step;
                 b -= z.cross(&frames.pivot(j)) * step;
-                let a = size * (2.0 * phi + size);
-                lever_sum += a;
-                lever_base += a * pivot_chain;
-                phi += size;
             }
-            JointKind::Prismatic => {
-                b += z * step;
-                sliding += size * phi;
-            }
+            JointKind::Prismatic => b += z * step,
         }
-        pivot_chain = link.chain;
+        let second = q_sums.link(joint.kind, size, link.chain);
         let end_v = w.cross(&frames.link_end(j)) + b;
         let first_sq = max(start_v.norm_squared(), end_v.norm_squared());
-        let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
         let pressed = nearest.filter(|h| h.link as usize == j);
         let (v0, v1) = (start_v, end_v);
         start_v = end_v;

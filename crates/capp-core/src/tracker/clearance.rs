@@ -32,6 +32,7 @@ use crate::kinematics::Frames;
 use crate::math::{max, min, Vec3};
 use crate::robot::{JointKind, Robot};
 use crate::self_collision::field::{LinkPair, MAX_CLOSE_PAIRS};
+use crate::step_size::SecondOrder;
 
 /// Most ticks of a stop the test simulates; a stop that has not reached
 /// rest by then is not cleared.
@@ -146,9 +147,7 @@ pub fn stop_margin<const N: usize>(
     // Second order: Q_k of the largest excursions (step_size's sums).
     // The least room over need, squared (a NaN anywhere gives 0).
     let mut least_sq = f32::INFINITY;
-    let mut phi = 0.0f32;
-    let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
-    let mut pivot_chain = 0.0f32;
+    let mut q_sums = SecondOrder::default();
     for (k, ((joint, link), ((&size, &f), &d_sq))) in robot
         .joints()
         .iter()
@@ -156,17 +155,7 @@ pub fn stop_margin<const N: usize>(
         .zip(largest[..n].iter().zip(&first[..n]).zip(distance_sq))
         .enumerate()
     {
-        match joint.kind {
-            JointKind::Revolute => {
-                let a = size * (2.0 * phi + size);
-                lever_sum += a;
-                lever_base += a * pivot_chain;
-                phi += size;
-            }
-            JointKind::Prismatic => sliding += size * phi,
-        }
-        pivot_chain = link.chain;
-        let second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
+        let second = q_sums.link(joint.kind, size, link.chain);
         let travel = f + second;
         let travel_sq = travel * travel;
         let mut slid = false;
@@ -215,9 +204,7 @@ fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) {
 /// joint `a + 1` on).
 fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) -> f32 {
     let (a, b) = (links[0] as usize, links[1] as usize);
-    let mut phi = 0.0f32;
-    let (mut lever_sum, mut lever_base, mut sliding) = (0.0f32, 0.0f32, 0.0f32);
-    let mut pivot_chain = 0.0f32;
+    let mut q_sums = SecondOrder::default();
     let mut second = 0.0f32;
     for (m, ((joint, link), &size)) in robot
         .joints()
@@ -227,19 +214,11 @@ fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) 
         .enumerate()
         .take(b + 1)
     {
-        if m > a {
-            match joint.kind {
-                JointKind::Revolute => {
-                    let w = size * (2.0 * phi + size);
-                    lever_sum += w;
-                    lever_base += w * pivot_chain;
-                    phi += size;
-                }
-                JointKind::Prismatic => sliding += size * phi,
-            }
-        }
-        pivot_chain = link.chain;
-        second = max(0.5 * (link.chain * lever_sum - lever_base), 0.0) + sliding;
+        second = if m > a {
+            q_sums.link(joint.kind, size, link.chain)
+        } else {
+            q_sums.still(link.chain)
+        };
     }
     second
 }

@@ -359,6 +359,51 @@ fn random_chain(rng: &mut Rng, n: usize) -> Vec<crate::Joint> {
         .collect()
 }
 
+/// Joints of the stop tests' arms.
+const N: usize = 8;
+
+/// A random 3- to 7-joint chain at a random configuration, moving: a few
+/// ticks from rest toward random velocities (the stop tests' state).
+struct MovingArm {
+    n: usize,
+    robot: crate::Robot<N>,
+    limits: Vec<DriveLimits>,
+    q: Vec<f32>,
+    dt: f32,
+    after: DriveState<N>,
+    frames: crate::kinematics::Frames<N>,
+}
+
+impl MovingArm {
+    fn random(rng: &mut Rng) -> Self {
+        let n = 3 + (range(rng, 0.0, 5.0) as usize);
+        let joints = random_chain(rng, n);
+        let robot = crate::Robot::<N>::new(&joints).unwrap();
+        let limits: Vec<DriveLimits> = joints
+            .iter()
+            .map(|j| DriveLimits::from_rate(j.max_rate))
+            .collect();
+        let q: Vec<f32> = (0..n).map(|_| rng.uniform() * 2.0).collect();
+        let dt = 0.05;
+        let mut after = DriveState::<N>::at_rest(n);
+        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
+        for _ in 0..(1 + range(rng, 0.0, 15.0) as usize) {
+            after = after.toward(&limits, dt, &target);
+        }
+        let mut frames = crate::kinematics::Frames::<N>::default();
+        crate::kinematics::forward_kinematics(&robot, &q, &mut frames);
+        MovingArm {
+            n,
+            robot,
+            limits,
+            q,
+            dt,
+            after,
+            frames,
+        }
+    }
+}
+
 /// Soundness of [`stop_is_clear`]: for each link alone given a room just
 /// under how far its points really go during the tick and the stop (forward
 /// kinematics at every tick and between ticks), the test must refuse; and
@@ -370,26 +415,18 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
     use super::clearance::stop_is_clear;
     use crate::kinematics::{forward_kinematics, Frames};
     use crate::self_collision::field::LinkPair;
-    const N: usize = 8;
     let mut rng = Rng::seeded(17, &[]);
     let (mut refused, mut pairs_refused) = (0, 0);
     for _ in 0..150 {
-        let n = 3 + (range(&mut rng, 0.0, 5.0) as usize);
-        let joints = random_chain(&mut rng, n);
-        let robot = crate::Robot::<N>::new(&joints).unwrap();
-        let limits: Vec<DriveLimits> = joints
-            .iter()
-            .map(|j| DriveLimits::from_rate(j.max_rate))
-            .collect();
-        let q: Vec<f32> = (0..n).map(|_| rng.uniform() * 2.0).collect();
-        let dt = 0.05;
-        let mut after = DriveState::<N>::at_rest(n);
-        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
-        for _ in 0..(1 + range(&mut rng, 0.0, 15.0) as usize) {
-            after = after.toward(&limits, dt, &target);
-        }
-        let mut frames = Frames::<N>::default();
-        forward_kinematics(&robot, &q, &mut frames);
+        let MovingArm {
+            n,
+            robot,
+            limits,
+            q,
+            dt,
+            after,
+            frames,
+        } = MovingArm::random(&mut rng);
         let points = |f: &Frames<N>, k: usize| {
             [
                 f.pivot(k),
@@ -496,28 +533,19 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
 #[test]
 fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
     use super::clearance::{stop_is_clear, stop_margin};
-    use crate::kinematics::{forward_kinematics, Frames};
     use crate::self_collision::field::LinkPair;
-    const N: usize = 8;
     let mut rng = Rng::seeded(29, &[]);
     let mut tested = 0;
     for _ in 0..120 {
-        let n = 3 + (range(&mut rng, 0.0, 5.0) as usize);
-        let joints = random_chain(&mut rng, n);
-        let robot = crate::Robot::<N>::new(&joints).unwrap();
-        let limits: Vec<DriveLimits> = joints
-            .iter()
-            .map(|j| DriveLimits::from_rate(j.max_rate))
-            .collect();
-        let q: Vec<f32> = (0..n).map(|_| rng.uniform() * 2.0).collect();
-        let dt = 0.05;
-        let mut after = DriveState::<N>::at_rest(n);
-        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
-        for _ in 0..(1 + range(&mut rng, 0.0, 15.0) as usize) {
-            after = after.toward(&limits, dt, &target);
-        }
-        let mut frames = Frames::<N>::default();
-        forward_kinematics(&robot, &q, &mut frames);
+        let MovingArm {
+            n,
+            robot,
+            limits,
+            q: _,
+            dt,
+            after,
+            frames,
+        } = MovingArm::random(&mut rng);
         let mut rooms = [0.0f32; N];
         for r in rooms[..n].iter_mut() {
             *r = range(&mut rng, 0.01, 0.5);
