@@ -7,6 +7,7 @@ use capp_sim::output::rows_csv;
 use capp_sim::render::{self, plots, views, Canvas, Shape};
 use capp_sim::trajectory::Trajectory;
 use capp_sim::{plan, trajectory, Problem};
+mod common;
 
 fn payload_bay() -> (Problem, Trajectory) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_payload_bay.toml");
@@ -295,24 +296,6 @@ fn the_arm_png_draws_the_payload_where_it_projects() {
     assert_eq!(pixel(above), [255; 3], "the page at {above:?}");
 }
 
-/// `planar_arm.toml` with `motion = "tracked"`, planned, as its
-/// trajectory file reads back.
-fn tracked_planar() -> (Problem, Trajectory) {
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml"),
-    )
-    .unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("planar_tracked.toml");
-    std::fs::write(&file, format!("{text}\nmotion = \"tracked\"\n")).unwrap();
-    let problem = Problem::load(&file).unwrap();
-    let scenario = problem.validate().unwrap();
-    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
-    let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();
-    let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
-    (problem, t)
-}
-
 /// The texts of a canvas.
 fn texts(c: &Canvas) -> Vec<&str> {
     c.shapes
@@ -331,7 +314,7 @@ fn texts(c: &Canvas) -> Vec<&str> {
 /// the columns.
 #[test]
 fn plots_show_velocity_and_acceleration_against_their_limits() {
-    let (problem, t) = tracked_planar();
+    let (problem, t) = common::tracked_planar();
     let canvas = plots::plots(&problem, &t);
     let all = texts(&canvas);
     for label in [

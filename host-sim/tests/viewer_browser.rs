@@ -34,6 +34,25 @@ fn chromium() -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
+/// The browser, or `None` after saying that `test` is skipped; with
+/// `CAPP_REQUIRE_CHROMIUM` set (the test script sets it, having installed
+/// Chromium) a missing browser fails the test instead.
+fn chromium_or_skip(test: &str) -> Option<PathBuf> {
+    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
+    let exe = chromium();
+    if exe.is_none() {
+        assert!(
+            !required,
+            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
+        );
+        eprintln!(
+            "SKIPPED {test}: no Chromium found \
+             (apt-get install chromium, or set CAPP_CHROMIUM; scripts/test.sh installs it)"
+        );
+    }
+    exe
+}
+
 /// Headless, no GPU: WebGL runs on SwiftShader. The networking flags keep
 /// the browser from reaching out (there is no network to reach).
 const FLAGS: [&str; 11] = [
@@ -100,16 +119,7 @@ fn browse_url(exe: &Path, url: &str, extra: &[String]) -> Output {
 
 #[test]
 fn viewer_draws_in_a_real_browser() {
-    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
-    let Some(exe) = chromium() else {
-        assert!(
-            !required,
-            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
-        );
-        eprintln!(
-            "SKIPPED viewer_draws_in_a_real_browser: no Chromium found \
-             (apt-get install chromium, or set CAPP_CHROMIUM; scripts/test.sh installs it)"
-        );
+    let Some(exe) = chromium_or_skip("viewer_draws_in_a_real_browser") else {
         return;
     };
 
@@ -201,13 +211,7 @@ fn viewer_draws_in_a_real_browser() {
 /// shows it.
 #[test]
 fn viewer_shows_the_escape_under_way() {
-    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
-    let Some(exe) = chromium() else {
-        assert!(
-            !required,
-            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
-        );
-        eprintln!("SKIPPED viewer_shows_the_escape_under_way: no Chromium found");
+    let Some(exe) = chromium_or_skip("viewer_shows_the_escape_under_way") else {
         return;
     };
     let text = common::planar_trap("detour", 5.0);
@@ -249,13 +253,7 @@ fn viewer_shows_the_escape_under_way() {
 /// screenshot gains their see-through blue.
 #[test]
 fn viewer_shows_and_hides_the_link_capsules() {
-    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
-    let Some(exe) = chromium() else {
-        assert!(
-            !required,
-            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
-        );
-        eprintln!("SKIPPED viewer_shows_and_hides_the_link_capsules: no Chromium found");
+    let Some(exe) = chromium_or_skip("viewer_shows_and_hides_the_link_capsules") else {
         return;
     };
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml");
@@ -383,27 +381,11 @@ fn cell_after<'a>(dom: &'a str, label: &str) -> &'a str {
 /// trajectory written before the columns gets a note, not bars.
 #[test]
 fn viewer_shows_each_joints_velocity_and_acceleration() {
-    let required = std::env::var_os("CAPP_REQUIRE_CHROMIUM").is_some();
-    let Some(exe) = chromium() else {
-        assert!(
-            !required,
-            "CAPP_REQUIRE_CHROMIUM is set but no chromium is installed"
-        );
-        eprintln!("SKIPPED viewer_shows_each_joints_velocity_and_acceleration: no Chromium found");
+    let Some(exe) = chromium_or_skip("viewer_shows_each_joints_velocity_and_acceleration") else {
         return;
     };
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml"),
-    )
-    .unwrap();
+    let (problem, t) = common::tracked_planar();
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("planar_tracked.toml");
-    std::fs::write(&file, format!("{text}\nmotion = \"tracked\"\n")).unwrap();
-    let problem = Problem::load(&file).unwrap();
-    let scenario = problem.validate().unwrap();
-    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
-    let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();
-    let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
     let html = viewer(&problem, &t);
     let page = dir.path().join("viewer.html");
     std::fs::write(&page, &html).unwrap();

@@ -1,6 +1,12 @@
 //! Test support shared by the host-sim tests: a planar dead end by
-//! construction, as scenario text.
+//! construction, as scenario text; the shipped planar arm planned tracked.
 #![allow(dead_code)]
+
+use std::path::Path;
+
+use capp_sim::output::rows_csv;
+use capp_sim::trajectory::Trajectory;
+use capp_sim::{plan, trajectory, Problem};
 
 /// The planar arm of `capp-core`'s tests (links of 10 in, reach 30 in),
 /// starting at `START`, its hand at (28.96, 2.90); the target is the hand's
@@ -48,4 +54,22 @@ pub fn planar_trap(name: &str, half_height: f64) -> String {
          [settings]\njoint_margin = 1.0\nlink_margin = 0.5\npoints_per_link = 3\ninfluence_distance = 5.0\n",
         -y
     )
+}
+
+/// `planar_arm.toml` with `motion = "tracked"`, planned, as its
+/// trajectory file reads back.
+pub fn tracked_planar() -> (Problem, Trajectory) {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml"),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("planar_tracked.toml");
+    std::fs::write(&file, format!("{text}\nmotion = \"tracked\"\n")).unwrap();
+    let problem = Problem::load(&file).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
+    (problem, t)
 }
