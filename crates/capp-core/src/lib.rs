@@ -48,10 +48,13 @@
 //!   obstacle counts (and a fixed number of step halvings); no loop depends on
 //!   the data's values.
 //! * Every transcendental goes through `libm` or [`math::sin_cos`] (plain `f32`
-//!   operations, which round alike everywhere), so the same inputs give the
-//!   same bits on the host and on a Cortex-M4F.
+//!   operations, which round alike everywhere), and every square root through
+//!   [`math::sqrt`] (correctly rounded: the FPU's instruction on the board),
+//!   so the same inputs give the same bits on the host and on a Cortex-M4F.
+//! * No `unsafe` but [`math::sqrt`]'s declaration of the board's one-instruction
+//!   square root.
 #![cfg_attr(not(feature = "trace"), no_std)]
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 #[cfg(test)]

@@ -11,16 +11,67 @@ pub type Vec3 = Vector3<f32>;
 /// A 3 x 3 matrix of `f32` (rotations: columns are the frame's unit axes).
 pub type Mat3 = Matrix3<f32>;
 
-/// Euclidean length, through `libm::sqrtf` (correctly rounded on every target).
+/// The square root, correctly rounded (IEEE 754) on every target, so the
+/// host and the board compute the same bits.
+///
+/// On a hard-float Arm target (the Cortex-M4F boards, `eabihf`) this is
+/// the FPU's `vsqrt.f32`: one instruction, where `libm::sqrtf` (which has
+/// no Arm implementation) runs about 55 integer instructions. Elsewhere it
+/// is `libm::sqrtf` (on x86-64 the SSE `sqrtss`). IEEE 754 requires the
+/// square root correctly rounded, as it does `+ - * /`, so the two agree
+/// to the bit; the QEMU tests that compare the board's trajectories with
+/// the host's (`tests/`) check it end to end.
+///
+/// Why hand-written: `f32::sqrt` is `std`-only, `core::f32::math::sqrt`
+/// is unstable, and `libm` has no Arm implementation. The one `unsafe`
+/// item of this crate is the declaration of that two-instruction routine.
+#[inline(always)]
+pub fn sqrt(x: f32) -> f32 {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        vsqrt(x)
+    }
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    {
+        libm::sqrtf(x)
+    }
+}
+
+/// `vsqrt.f32` on `x`. Rust lets inline assembly name a single-precision
+/// register only on targets with double-precision VFP (`vfp2`), which the
+/// Cortex-M4F's FPU is not, so the value passes in a core register and the
+/// scratch register `s0` is saved and restored around the instruction.
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[allow(unsafe_code)]
+#[inline(never)]
+fn vsqrt(x: f32) -> f32 {
+    let mut bits = x.to_bits();
+    // SAFETY: registers only, apart from the push and pop of `s0`, which
+    // leave it and the stack pointer as they were.
+    unsafe {
+        core::arch::asm!(
+            "vpush {{s0}}",
+            "vmov s0, {bits}",
+            "vsqrt.f32 s0, s0",
+            "vmov {bits}, s0",
+            "vpop {{s0}}",
+            bits = inout(reg) bits,
+            options(pure, nomem, preserves_flags)
+        );
+    }
+    f32::from_bits(bits)
+}
+
+/// Euclidean length, through [`sqrt`].
 #[inline]
 pub fn norm(v: &Vec3) -> f32 {
-    libm::sqrtf(v.dot(v))
+    sqrt(v.dot(v))
 }
 
 /// Euclidean length of a joint-space vector.
 #[inline]
 pub fn norm_slice(v: &[f32]) -> f32 {
-    libm::sqrtf(dot_slice(v, v))
+    sqrt(dot_slice(v, v))
 }
 
 /// Dot product of two joint-space vectors (of the shorter length).
@@ -130,6 +181,20 @@ pub fn min(a: f32, b: f32) -> f32 {
     }
 }
 
+/// `floor(x)` for `x >= 0` (and NaN, which it keeps) by a conversion to an
+/// integer: `libm::floorf` is a call of some 25 instructions on the
+/// Cortex-M4F (no rounding instruction in its FPU), this is two. Not for
+/// negative `x`.
+#[inline(always)]
+pub fn floor_non_negative(x: f32) -> f32 {
+    // From 2^23 on every f32 is an integer (and infinity stays).
+    if x < 8_388_608.0 {
+        (x as u32) as f32
+    } else {
+        x
+    }
+}
+
 /// Whether every entry is finite.
 #[inline]
 pub fn all_finite(v: &[f32]) -> bool {
@@ -200,6 +265,36 @@ mod tests {
             assert_eq!((s.to_bits(), c.to_bits()), (ls.to_bits(), lc.to_bits()));
         }
         assert_eq!(sin_cos(0.0), (0.0, 1.0));
+    }
+
+    #[test]
+    fn floor_of_non_negative_values_is_libm_s() {
+        let mut x = 0.0f32;
+        let mut checked = 0;
+        while x < 3.0e7 {
+            for y in [x, x.next_up(), (x + 1.0).next_down()] {
+                assert_eq!(
+                    floor_non_negative(y).to_bits(),
+                    libm::floorf(y).to_bits(),
+                    "{y}"
+                );
+                checked += 1;
+            }
+            x = x * 1.37 + 0.11;
+        }
+        for y in [
+            0.0,
+            0.5,
+            1.0,
+            8_388_607.5,
+            8_388_608.0,
+            1.0e30,
+            f32::INFINITY,
+        ] {
+            assert_eq!(floor_non_negative(y).to_bits(), libm::floorf(y).to_bits());
+        }
+        assert!(floor_non_negative(f32::NAN).is_nan());
+        assert!(checked > 100);
     }
 
     #[test]

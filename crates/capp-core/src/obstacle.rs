@@ -362,7 +362,7 @@ fn sphere_bound(reach_sq: f32) -> f32 {
     if !reach_sq.is_finite() {
         return f32::INFINITY;
     }
-    let mut w = libm::sqrtf(reach_sq);
+    let mut w = crate::math::sqrt(reach_sq);
     while w * w <= reach_sq {
         w = w.next_up();
     }
@@ -497,7 +497,7 @@ impl Obstacle {
     /// deciding whether to go round it.
     pub fn bounding_radius(&self) -> f32 {
         let axes = self.source.semi_axes;
-        libm::sqrtf(axes.iter().map(|a| a * a).sum::<f32>())
+        crate::math::sqrt(axes.iter().map(|a| a * a).sum::<f32>())
     }
 
     /// How far the shape's bounding box, inflated by `margin`, reaches from

@@ -345,7 +345,7 @@ impl<const N: usize> Robot<N> {
                 JointKind::Revolute => j.d.abs(),
                 JointKind::Prismatic => j.min.abs().max(j.max.abs()),
             };
-            chain += libm::sqrtf(j.a * j.a + d * d);
+            chain += crate::math::sqrt(j.a * j.a + d * d);
             *link = LinkConstants {
                 cos_alpha,
                 sin_alpha,

@@ -241,8 +241,8 @@ fn travel_bound(first_sq: f32, second: f32, allowed_sq: f32) -> f32 {
     if 2.0 * (first_sq + second * second) <= allowed_sq {
         return 1.0;
     }
-    let first = libm::sqrtf(first_sq);
-    let allowed = libm::sqrtf(allowed_sq);
+    let first = crate::math::sqrt(first_sq);
+    let allowed = crate::math::sqrt(allowed_sq);
     largest_s(first, second, allowed)
 }
 
@@ -255,7 +255,7 @@ fn largest_s(first: f32, second: f32, allowed: f32) -> f32 {
     if first + second <= allowed {
         return 1.0;
     }
-    let root = libm::sqrtf(first * first + 4.0 * second * allowed);
+    let root = crate::math::sqrt(first * first + 4.0 * second * allowed);
     2.0 * allowed / (first + root)
 }
 

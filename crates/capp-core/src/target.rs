@@ -74,8 +74,8 @@ pub fn pose_error<const N: usize>(
     PoseError {
         e,
         v: 0.5 * (position_sq + orientation_scale * orientation_scale * orientation_sq),
-        position: libm::sqrtf(position_sq),
-        orientation: libm::sqrtf(orientation_sq),
+        position: crate::math::sqrt(position_sq),
+        orientation: crate::math::sqrt(orientation_sq),
         has_orientation: target.orientation.is_some(),
     }
 }

@@ -313,7 +313,7 @@ pub fn weighted_rate<const N: usize>(
         .zip(rate.iter())
         .map(|(joint, r)| r.abs() / joint.max_rate)
         .fold(0.0f32, max);
-    let k = smooth(libm::sqrtf(2.0 * error.v), settings.approach_radius) / worst;
+    let k = smooth(crate::math::sqrt(2.0 * error.v), settings.approach_radius) / worst;
     if !(k.is_finite()) {
         rate.fill(0.0);
         return Drive::Idle;

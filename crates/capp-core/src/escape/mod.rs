@@ -737,7 +737,7 @@ mod tests {
         // Solve the planar arm for p: the last link along the x axis from
         // (p.x - 1, p.y), the first three folded to reach it.
         let (x, y) = (p.x - 1.0, p.y);
-        let r = libm::sqrtf(x * x + y * y);
+        let r = crate::math::sqrt(x * x + y * y);
         // Three unit links reaching distance r along the direction to (x, y):
         // the middle one along it, the outer two at +-a with 2 cos a + 1 = r.
         let a = libm::acosf(((r - 1.0) / 2.0).clamp(-1.0, 1.0));

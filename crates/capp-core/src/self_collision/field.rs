@@ -184,7 +184,7 @@ pub fn link_pairs<const N: usize>(
                     // The capsules lie within their spheres of `reach`
                     // less the influence's share of the radii.
                     let inflation = INFLUENCE * CLEARANCE_SCALE * (r_a + r_b);
-                    let gap = libm::sqrtf(centres_sq) - reach + inflation;
+                    let gap = crate::math::sqrt(centres_sq) - reach + inflation;
                     let pair = LinkPair {
                         clearance: f32::INFINITY,
                         gap,
@@ -200,7 +200,7 @@ pub fn link_pairs<const N: usize>(
                 &frames.pivot(b),
                 &frames.link_end(b),
             );
-            let distance = libm::sqrtf(pair.distance_sq);
+            let distance = crate::math::sqrt(pair.distance_sq);
             let radii = r_a + r_b;
             let gap = distance - radii;
             let scale = CLEARANCE_SCALE * radii;
@@ -376,7 +376,7 @@ mod tests {
                         }
                     }
                     let gap = best - 0.2;
-                    let shares = libm::sqrtf(room[a]) + libm::sqrtf(room[b]);
+                    let shares = crate::math::sqrt(room[a]) + crate::math::sqrt(room[b]);
                     assert!(
                         shares <= gap.max(0.0) + 1e-3,
                         "links {a} {b}: {shares} > {gap}"

@@ -177,10 +177,10 @@ impl<const N: usize> LinkCapsules<N> {
                 return Err(CapsuleError::BadPair { link: link as u8 });
             }
             let longest = match joint.kind {
-                JointKind::Revolute => libm::sqrtf(joint.a * joint.a + joint.d * joint.d),
+                JointKind::Revolute => crate::math::sqrt(joint.a * joint.a + joint.d * joint.d),
                 JointKind::Prismatic => {
                     let d = max(joint.min.abs(), joint.max.abs());
-                    libm::sqrtf(joint.a * joint.a + d * d)
+                    crate::math::sqrt(joint.a * joint.a + d * d)
                 }
             };
             *radius = r;

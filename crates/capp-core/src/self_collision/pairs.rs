@@ -112,7 +112,7 @@ impl<const N: usize> PairTable<N> {
                 JointKind::Revolute => joint.d.abs(),
                 JointKind::Prismatic => max(joint.min.abs(), joint.max.abs()),
             };
-            let longest = libm::sqrtf(joint.a * joint.a + d * d);
+            let longest = crate::math::sqrt(joint.a * joint.a + d * d);
             radius.get(k).is_some_and(|&r| longest < 2.0 * r)
         };
         for a in 0..n {

@@ -131,7 +131,7 @@ mod tests {
             let c = closest_points(&f(p1), &f(q1), &f(p2), &f(q2));
             let g = |a: [f32; 3]| a.map(|x| x as f64);
             let want = reference(g(p1), g(q1), g(p2), g(q2));
-            let got = libm::sqrtf(c.distance_sq) as f64;
+            let got = crate::math::sqrt(c.distance_sq) as f64;
             // The grid over `s` is 1/4000 of a segment up to 35 long.
             assert!(
                 (got - want).abs() <= 2e-3 + 1e-4 * want && got <= want + 1e-4 * (1.0 + want),

@@ -87,10 +87,19 @@ pub fn stop_margin<const N: usize>(
     fraction: f32,
 ) -> f32 {
     let n = robot.len().min(N).min(distance_sq.len());
-    let mut first = [0.0f32; N];
-    let mut relative = [0.0f32; MAX_CLOSE_PAIRS];
+    // Squares of the largest travels, per link and per pair: square roots
+    // once, at the end (the same bits: a correctly rounded root is
+    // monotone).
+    let mut first_sq = [0.0f32; N];
+    let mut relative_sq = [0.0f32; MAX_CLOSE_PAIRS];
     let mut turn = [Vec3::zeros(); N];
     let mut shift = [Vec3::zeros(); N];
+    let mut end_velocity = [Vec3::zeros(); N];
+    // Each revolute joint's `z_j x o_j`, which every tick's field needs.
+    let mut moment = [Vec3::zeros(); N];
+    for (j, m) in moment[..n].iter_mut().enumerate() {
+        *m = frames.axis(j).cross(&frames.pivot(j));
+    }
     // Per link with a plane, the most either end moves toward it over the
     // ticks.
     let mut toward = [[0.0f32; 2]; N];
@@ -110,20 +119,25 @@ pub fn stop_margin<const N: usize>(
         first_order(
             robot,
             frames,
+            &moment[..n],
             &x[..n],
-            &mut first[..n],
+            &mut first_sq[..n],
             &mut turn,
             &mut shift,
+            &mut end_velocity,
         );
         for (j, (plane, t)) in planes.iter().zip(toward.iter_mut()).enumerate().take(n) {
-            if let (Some(h), Some(w), Some(b)) = (plane, turn.get(j), shift.get(j)) {
+            if let (Some(h), Some(w), Some(b), Some(end)) =
+                (plane, turn.get(j), shift.get(j), end_velocity.get(j))
+            {
                 let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
-                for (t, p) in t.iter_mut().zip([frames.pivot(j), frames.link_end(j)]) {
-                    *t = max(*t, -normal.dot(&(w.cross(&p) + b)));
+                let start = w.cross(&frames.pivot(j)) + b;
+                for (t, v) in t.iter_mut().zip([start, *end]) {
+                    *t = max(*t, -normal.dot(&v));
                 }
             }
         }
-        for (pair, rel) in pairs.iter().zip(relative.iter_mut()) {
+        for (pair, rel_sq) in pairs.iter().zip(relative_sq.iter_mut()) {
             let [a, b] = pair.links;
             let (a, b) = (a as usize, b as usize);
             if let (Some(wa), Some(wb), Some(ba), Some(bb)) =
@@ -132,7 +146,7 @@ pub fn stop_margin<const N: usize>(
                 let (w, v) = (wb - wa, bb - ba);
                 let at = |p: Vec3| (w.cross(&p) + v).norm_squared();
                 let worst = max(at(frames.pivot(b)), at(frames.link_end(b)));
-                *rel = max(*rel, libm::sqrtf(worst));
+                *rel_sq = max(*rel_sq, worst);
             }
         }
         if state.is_at_rest(limits, 0.0) {
@@ -142,21 +156,21 @@ pub fn stop_margin<const N: usize>(
         if ticks > MAX_STOP_TICKS {
             return 0.0;
         }
-        state = state.braking(limits, dt);
+        state.brake(limits, dt);
     }
     // Second order: Q_k of the largest excursions (step_size's sums).
     // The least room over need, squared (a NaN anywhere gives 0).
     let mut least_sq = f32::INFINITY;
     let mut q_sums = SecondOrder::default();
-    for (k, ((joint, link), ((&size, &f), &d_sq))) in robot
+    for (k, ((joint, link), ((&size, &f_sq), &d_sq))) in robot
         .joints()
         .iter()
         .zip(robot.links())
-        .zip(largest[..n].iter().zip(&first[..n]).zip(distance_sq))
+        .zip(largest[..n].iter().zip(&first_sq[..n]).zip(distance_sq))
         .enumerate()
     {
         let second = q_sums.link(joint.kind, size, link.chain);
-        let travel = f + second;
+        let travel = crate::math::sqrt(f_sq) + second;
         let travel_sq = travel * travel;
         let mut slid = false;
         if let Some(h) = planes.get(k).copied().flatten() {
@@ -176,12 +190,12 @@ pub fn stop_margin<const N: usize>(
             lower(&mut least_sq, d_sq, travel_sq);
         }
     }
-    for (pair, &rel) in pairs.iter().zip(&relative) {
-        let need = rel + between(robot, &largest[..n], pair.links);
+    for (pair, &rel_sq) in pairs.iter().zip(&relative_sq) {
+        let need = crate::math::sqrt(rel_sq) + between(robot, &largest[..n], pair.links);
         let gap = max(pair.gap, 0.0);
         lower(&mut least_sq, gap * gap, need * need);
     }
-    fraction * libm::sqrtf(least_sq)
+    fraction * crate::math::sqrt(least_sq)
 }
 
 /// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
@@ -223,40 +237,45 @@ fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) 
     second
 }
 
-/// Per link, `first[k] = max(first[k], |J x|)` at the link's two ends: the
-/// velocity field of the displacement `x` (`v(p) = w x p + b`), one pass;
-/// its prefix sums up to each joint into `turn` (`w`) and `shift` (`b`).
+/// Per link, `first_sq[k] = max(first_sq[k], |J x|^2)` at the link's two
+/// ends: the velocity field of the displacement `x` (`v(p) = w x p + b`),
+/// one pass, with each revolute joint's `z_j x o_j` in `moment`; its prefix
+/// sums up to each joint into `turn` (`w`) and `shift` (`b`), and the field
+/// at each link's end into `end_velocity`.
+#[allow(clippy::too_many_arguments)]
 fn first_order<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
+    moment: &[Vec3],
     x: &[f32],
-    first: &mut [f32],
+    first_sq: &mut [f32],
     turn: &mut [Vec3; N],
     shift: &mut [Vec3; N],
+    end_velocity: &mut [Vec3; N],
 ) {
     let mut w = Vec3::zeros();
     let mut b = Vec3::zeros();
     let mut start_sq = 0.0f32;
-    for (j, (((joint, &step), out), (tw, sb))) in robot
+    for (j, ((((joint, &step), out), (tw, sb)), (m, ev))) in robot
         .joints()
         .iter()
         .zip(x)
-        .zip(first.iter_mut())
+        .zip(first_sq.iter_mut())
         .zip(turn.iter_mut().zip(shift.iter_mut()))
+        .zip(moment.iter().zip(end_velocity.iter_mut()))
         .enumerate()
     {
-        let z = frames.axis(j);
         match joint.kind {
             JointKind::Revolute => {
-                w += z * step;
-                b -= z.cross(&frames.pivot(j)) * step;
+                w += frames.axis(j) * step;
+                b -= m * step;
             }
-            JointKind::Prismatic => b += z * step,
+            JointKind::Prismatic => b += frames.axis(j) * step,
         }
         (*tw, *sb) = (w, b);
-        let end_sq = (w.cross(&frames.link_end(j)) + b).norm_squared();
-        let worst = libm::sqrtf(max(start_sq, end_sq));
-        *out = max(*out, worst);
+        *ev = w.cross(&frames.link_end(j)) + b;
+        let end_sq = ev.norm_squared();
+        *out = max(*out, max(start_sq, end_sq));
         start_sq = end_sq;
     }
 }

@@ -41,6 +41,7 @@ pub mod clearance;
 pub mod limits;
 pub mod profile;
 
+use crate::math::min;
 use limits::DriveLimits;
 
 /// Every joint's velocity (per second) and acceleration (per second
@@ -109,11 +110,11 @@ impl<const N: usize> DriveState<N> {
             let e = clamp_rate(t, l) - v;
             (*lo, *hi) = profile::viable(v, a, l, dt);
             let wanted = profile::acceleration_for((v + e) - v, l.max_jerk * dt, dt);
-            *own = wanted.max(*lo).min(*hi);
+            *own = profile::clamp(wanted, *lo, *hi);
             if e.abs() > SETTLED * l.max_rate {
                 let fraction = *own * dt / e;
                 if fraction > 0.0 {
-                    rho = rho.min(fraction);
+                    rho = min(rho, fraction);
                 }
             }
         }
@@ -127,7 +128,7 @@ impl<const N: usize> DriveState<N> {
         {
             let e = clamp_rate(t, l) - v0;
             let synced = if own * e > 0.0 {
-                (rho * e / dt).max(lo).min(hi)
+                profile::clamp(rho * e / dt, lo, hi)
             } else {
                 *own
             };
@@ -138,19 +139,25 @@ impl<const N: usize> DriveState<N> {
     }
 
     /// The next tick of a stop at the limits: every joint brakes alone.
-    #[inline(never)]
     pub fn braking(&self, limits: &[DriveLimits], dt: f32) -> Self {
-        let n = self.n.min(N);
         let mut next = *self;
-        for ((v, a), l) in next.velocity[..n]
+        next.brake(limits, dt);
+        next
+    }
+
+    /// [`DriveState::braking`] in place (no copy of the state: the stop
+    /// test takes a dozen of these per candidate).
+    #[inline(never)]
+    pub fn brake(&mut self, limits: &[DriveLimits], dt: f32) {
+        let n = self.n.min(N);
+        for ((v, a), l) in self.velocity[..n]
             .iter_mut()
-            .zip(&mut next.acceleration[..n])
+            .zip(&mut self.acceleration[..n])
             .zip(limits)
         {
             *a = profile::braking(*v, *a, l, dt);
             *v += *a * dt;
         }
-        next
     }
 
     /// With [`crate::Motion::Stepped`]: the step just taken moved at `rate`
@@ -214,7 +221,7 @@ const SETTLED: f32 = 1.0e-6;
 
 fn clamp_rate(v: f32, l: &DriveLimits) -> f32 {
     if v.is_finite() {
-        v.max(-l.max_rate).min(l.max_rate)
+        profile::clamp(v, -l.max_rate, l.max_rate)
     } else {
         0.0
     }

@@ -47,7 +47,16 @@
 //! the way back is bounded the same way. Tests check the bound against the
 //! stop simulated tick by tick.
 
+use crate::math::{floor_non_negative, max, min, sqrt};
 use crate::tracker::limits::DriveLimits;
+
+/// `x` within `[low, high]` as `x.max(low).min(high)` gives it (a NaN `x`
+/// gives `low`), by compare and select: `f32::max` and `f32::min` are
+/// calls on the Cortex-M4F ([`crate::math::max`]).
+#[inline(always)]
+pub fn clamp(x: f32, low: f32, high: f32) -> f32 {
+    min(high, max(low, x))
+}
 
 /// The velocity change of taking `a` now and then ramping the acceleration
 /// back to zero at the jerk limit (`u = J dt` per tick), per second times
@@ -55,7 +64,7 @@ use crate::tracker::limits::DriveLimits;
 #[inline(never)]
 pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
     let x = a.abs();
-    let m = libm::floorf(x / u);
+    let m = floor_non_negative(x / u);
     let f = dt * ((m + 1.0) * x - 0.5 * u * m * (m + 1.0));
     if a < 0.0 {
         -f
@@ -70,7 +79,8 @@ pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
 pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
     let x = e.abs() / (dt * u);
     // Largest m with m (m + 1) / 2 <= x.
-    let m = libm::floorf(0.5 * (libm::sqrtf(1.0 + 8.0 * x) - 1.0)).max(0.0);
+    // (`max` with 0 first: a NaN gives 0.)
+    let m = max(0.0, floor_non_negative(0.5 * (sqrt(1.0 + 8.0 * x) - 1.0)));
     let a = e.abs() / (dt * (m + 1.0)) + 0.5 * u * m;
     if e < 0.0 {
         -a
@@ -87,10 +97,10 @@ pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
 #[inline(never)]
 pub fn viable(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
     let u = limits.max_jerk * dt;
-    let jerk_low = (a - u).max(-limits.max_accel);
-    let jerk_high = (a + u).min(limits.max_accel);
-    let low = jerk_low.max(acceleration_for(-limits.max_rate - v, u, dt));
-    let high = jerk_high.min(acceleration_for(limits.max_rate - v, u, dt));
+    let jerk_low = max(-limits.max_accel, a - u);
+    let jerk_high = min(limits.max_accel, a + u);
+    let low = max(jerk_low, acceleration_for(-limits.max_rate - v, u, dt));
+    let high = min(jerk_high, acceleration_for(limits.max_rate - v, u, dt));
     if low <= high {
         (low, high)
     } else {
@@ -106,7 +116,7 @@ pub fn viable(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32) {
 pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32 {
     let (low, high) = viable(v, a, limits, dt);
     let wanted = acceleration_for(target - v, limits.max_jerk * dt, dt);
-    wanted.max(low).min(high)
+    clamp(wanted, low, high)
 }
 
 /// The acceleration of a joint's next tick of braking to rest: [`toward`]
@@ -121,9 +131,9 @@ pub fn braking(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
         return 0.0;
     }
     let u = limits.max_jerk * dt;
-    let low = (a - u).max(-limits.max_accel);
-    let high = (a + u).min(limits.max_accel);
-    acceleration_for(-v, u, dt).max(low).min(high)
+    let low = max(-limits.max_accel, a - u);
+    let high = min(limits.max_accel, a + u);
+    clamp(acceleration_for(-v, u, dt), low, high)
 }
 
 /// A bound on how far (length units or radians) a joint at velocity `v`
@@ -200,7 +210,7 @@ pub fn braking_speed(room: f32, limits: &DriveLimits, dt: f32) -> f32 {
     }
     let accel = limits.max_accel;
     let b = 0.5 * accel / limits.max_jerk + dt;
-    accel * (libm::sqrtf(b * b + 2.0 * room / accel) - b)
+    accel * (sqrt(b * b + 2.0 * room / accel) - b)
 }
 
 /// The forward part of a stop from speed `w0 > 0` with an acceleration
@@ -231,7 +241,7 @@ fn decelerating(w0: f32, forward: f32, limits: &DriveLimits, dt: f32) -> f32 {
     // stop's deceleration passes `d`; plus half a tick of discrete lag.
     let (d, jerk) = (-forward, limits.max_jerk);
     let virtual_speed = w0 + 0.5 * d * d / jerk;
-    let peak = limits.max_accel.min(libm::sqrtf(jerk * virtual_speed));
+    let peak = limits.max_accel.min(sqrt(jerk * virtual_speed));
     if d <= peak {
         let t1 = d / jerk;
         let under_way = stop_from(virtual_speed, limits)
@@ -251,6 +261,6 @@ fn stop_from(w: f32, limits: &DriveLimits) -> f32 {
     if w * jerk >= accel * accel {
         0.5 * w * (w / accel + accel / jerk)
     } else {
-        w * libm::sqrtf(w / jerk)
+        w * sqrt(w / jerk)
     }
 }
