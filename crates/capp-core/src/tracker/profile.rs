@@ -160,13 +160,13 @@ pub fn stopping_span(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32
         // While a forward acceleration ramps out: `F(a - u)` more speed,
         // at most `ceil(a / u) - 1` ticks more.
         let (rise, rise_ticks) = if forward > 0.0 {
-            let rest = (forward - u).max(0.0);
+            let rest = max(0.0, forward - u);
             (settle_change(rest, u, dt), libm::ceilf(forward / u) - 1.0)
         } else {
             (0.0, 0.0)
         };
         let w = w0 + rise;
-        w * dt * (rise_ticks.max(0.0) + 1.0) + stop_from(w, limits)
+        w * dt * (max(0.0, rise_ticks) + 1.0) + stop_from(w, limits)
     } else {
         decelerating(w0, forward, limits, dt)
     };
@@ -175,7 +175,7 @@ pub fn stopping_span(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> (f32, f32
     // velocity passes zero by at most `-(v + F(a + u))`, within
     // `ceil(|a| / u) + 1` ticks.
     let back_speed = if forward < 0.0 {
-        (-(w0 + settle_change((forward + u).min(0.0), u, dt))).max(0.0)
+        max(0.0, -(w0 + settle_change(min(0.0, forward + u), u, dt)))
     } else {
         0.0
     };
@@ -222,12 +222,12 @@ pub fn braking_speed(room: f32, limits: &DriveLimits, dt: f32) -> f32 {
 #[inline(never)]
 fn decelerating(w0: f32, forward: f32, limits: &DriveLimits, dt: f32) -> f32 {
     let u = limits.max_jerk * dt;
-    let first = (forward + u).min(0.0);
+    let first = min(0.0, forward + u);
     let v1 = w0 + first * dt;
     if v1 <= 0.0 {
         return 0.0;
     }
-    let ticks = libm::ceilf(-forward / u).max(1.0);
+    let ticks = max(1.0, libm::ceilf(-forward / u));
     let end = w0 + settle_change(first, u, dt);
     let chord = if end >= 0.0 {
         v1 * dt + (ticks - 1.0) * dt * 0.5 * (v1 + end) + end * dt + stop_from(end, limits)
@@ -241,7 +241,7 @@ fn decelerating(w0: f32, forward: f32, limits: &DriveLimits, dt: f32) -> f32 {
     // stop's deceleration passes `d`; plus half a tick of discrete lag.
     let (d, jerk) = (-forward, limits.max_jerk);
     let virtual_speed = w0 + 0.5 * d * d / jerk;
-    let peak = limits.max_accel.min(sqrt(jerk * virtual_speed));
+    let peak = min(limits.max_accel, sqrt(jerk * virtual_speed));
     if d <= peak {
         let t1 = d / jerk;
         let under_way = stop_from(virtual_speed, limits)
