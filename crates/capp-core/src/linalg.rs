@@ -17,8 +17,8 @@ pub type Sym6 = [[f32; 6]; 6];
 /// A task-space 6-vector: linear part first (length units), angular part last.
 pub type Vec6 = [f32; 6];
 
-/// Factorises `a` in place as `L D L^T` (Cholesky without square roots: a
-/// software square root is some forty instructions on a Cortex-M4F): the
+/// Factorises `a` in place as `L D L^T` (Cholesky without square roots,
+/// each 14 cycles on the Cortex-M4F's FPU): the
 /// strict lower triangle becomes the unit lower-triangular `L`, the diagonal
 /// becomes `D`; the strict upper triangle is left as it was. Returns `false`,
 /// leaving `a` partly overwritten, when a pivot of `D` is not positive and

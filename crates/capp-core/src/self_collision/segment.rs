@@ -9,7 +9,7 @@
 //! and `no_std`, but it pulls its whole shape and `alloc`-free query stack
 //! (and its own `nalgebra` version) into a firmware that needs twenty lines
 //! of it; and these twenty lines must be bit-identical on the board and the
-//! host, which they are (no fused operations, no library calls but `sqrtf`).
+//! host, which they are (no fused operations, no library calls but [`crate::math::sqrt`]).
 
 use crate::math::{max, min, Vec3};
 
