@@ -26,7 +26,6 @@
 //! `Q_k` of each joint's largest excursion.
 
 use super::limits::DriveLimits;
-use super::profile::stopping_span;
 use super::DriveState;
 use crate::avoidance::HalfSpace;
 use crate::kinematics::Frames;
@@ -70,12 +69,10 @@ pub fn stop_is_clear<const N: usize>(
 
 /// How much room the tick to `after` and the stop from there leave: the
 /// least, over every link and pair of [`stop_is_clear`]'s test, of the room
-/// it may use over the travel bound it needs (0 for a stop that does not
-/// end within [`MAX_STOP_TICKS`], a room already used up, or a value that
-/// is not a number). At least 1 means clear, and is then a bound only: a
-/// pair that each joint's travel bound alone clears is left out. The tick
-/// chooses how far to slow its velocity target from a margin below 1
-/// ([`crate::planner`]).
+/// it may use over the travel bound it needs (at least 1: clear; 0 for a
+/// stop that does not end within [`MAX_STOP_TICKS`], a room already used
+/// up, or a value that is not a number). The tick chooses how far to slow
+/// its velocity target from it ([`crate::planner`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn stop_margin<const N: usize>(
@@ -103,31 +100,6 @@ pub fn stop_margin<const N: usize>(
     for (j, m) in moment[..n].iter_mut().enumerate() {
         *m = frames.axis(j).cross(&frames.pivot(j));
     }
-    // The pairs whose gap the stop might close; the others, cleared by
-    // each joint's travel bound alone ([`pair_cleared`]), are not followed
-    // tick by tick (the margin below 1 is the same without them).
-    let mut travel = [0.0f32; N];
-    for (((s, &v), &a), l) in travel[..n]
-        .iter_mut()
-        .zip(after.velocity())
-        .zip(after.acceleration())
-        .zip(limits)
-    {
-        let step = v * dt;
-        let (below, above) = stopping_span(v, a, l, dt);
-        *s = max((step - below).abs(), (step + above).abs());
-    }
-    let mut watched = [0u8; MAX_CLOSE_PAIRS];
-    let mut watching = 0;
-    for (i, pair) in pairs.iter().enumerate().take(MAX_CLOSE_PAIRS) {
-        if !pair_cleared(robot, frames, &travel[..n], pair, fraction) {
-            if let Some(w) = watched.get_mut(watching) {
-                *w = i as u8;
-                watching += 1;
-            }
-        }
-    }
-    let watched = &watched[..watching];
     // Per link with a plane, the most either end moves toward it over the
     // ticks.
     let mut toward = [[0.0f32; 2]; N];
@@ -165,10 +137,7 @@ pub fn stop_margin<const N: usize>(
                 }
             }
         }
-        for (&i, rel_sq) in watched.iter().zip(relative_sq.iter_mut()) {
-            let Some(pair) = pairs.get(i as usize) else {
-                continue;
-            };
+        for (pair, rel_sq) in pairs.iter().zip(relative_sq.iter_mut()) {
             let [a, b] = pair.links;
             let (a, b) = (a as usize, b as usize);
             if let (Some(wa), Some(wb), Some(ba), Some(bb)) =
@@ -221,54 +190,12 @@ pub fn stop_margin<const N: usize>(
             lower(&mut least_sq, d_sq, travel_sq);
         }
     }
-    for (&i, &rel_sq) in watched.iter().zip(&relative_sq) {
-        let Some(pair) = pairs.get(i as usize) else {
-            continue;
-        };
+    for (pair, &rel_sq) in pairs.iter().zip(&relative_sq) {
         let need = crate::math::sqrt(rel_sq) + between(robot, &largest[..n], pair.links);
         let gap = max(pair.gap, 0.0);
         lower(&mut least_sq, gap * gap, need * need);
     }
     fraction * crate::math::sqrt(least_sq)
-}
-
-/// Whether the stop cannot bring the pair's later link within its share of
-/// the gap, by each joint's travel bound alone: joint `j` stays within
-/// `travel[j]` of where it is over the tick and the stop, so a point `p`
-/// of link `b` moves against link `a` by at most
-/// `sum_{a < j <= b} travel_j |c_j(p)|` to first order (`c_j(p) = z_j x
-/// (p - o_j)`, revolute; `z_j`, prismatic), a bound of what the simulated
-/// stop finds (the triangle inequality), plus the same second-order term.
-fn pair_cleared<const N: usize>(
-    robot: &Robot<N>,
-    frames: &Frames<N>,
-    travel: &[f32],
-    pair: &LinkPair,
-    fraction: f32,
-) -> bool {
-    let (a, b) = (pair.links[0] as usize, pair.links[1] as usize);
-    let ends = [frames.pivot(b), frames.link_end(b)];
-    let mut reach = [0.0f32; 2];
-    for (j, (joint, &s)) in robot
-        .joints()
-        .iter()
-        .zip(travel)
-        .enumerate()
-        .take(b + 1)
-        .skip(a + 1)
-    {
-        let (z, o) = (frames.axis(j), frames.pivot(j));
-        for (r, p) in reach.iter_mut().zip(ends) {
-            let lever = match joint.kind {
-                JointKind::Revolute => crate::math::norm(&z.cross(&(p - o))),
-                JointKind::Prismatic => 1.0,
-            };
-            *r += s * lever;
-        }
-    }
-    let need = max(reach[0], reach[1]) + between(robot, travel, pair.links);
-    // NaN anywhere: not cleared.
-    fraction * max(pair.gap, 0.0) >= need
 }
 
 /// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
