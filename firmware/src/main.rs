@@ -23,7 +23,15 @@ mod board;
 #[cfg(all(feature = "nucleo-f446re", not(feature = "nopanic")))]
 use {defmt_rtt as _, panic_probe as _};
 #[cfg(all(feature = "mps2-an386", not(feature = "nopanic")))]
-use {defmt_semihosting as _, panic_semihosting as _};
+use defmt_semihosting as _;
+
+/// Panics on QEMU: where and what on stderr, exit status 1
+/// ([`board::panicked`]).
+#[cfg(all(feature = "mps2-an386", not(feature = "nopanic")))]
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    board::panicked(info)
+}
 
 #[cfg(feature = "nopanic")]
 mod nopanic {
