@@ -26,6 +26,7 @@
 //! `Q_k` of each joint's largest excursion.
 
 use super::limits::DriveLimits;
+use super::profile::stopping_span;
 use super::DriveState;
 use crate::avoidance::HalfSpace;
 use crate::kinematics::Frames;
@@ -69,10 +70,12 @@ pub fn stop_is_clear<const N: usize>(
 
 /// How much room the tick to `after` and the stop from there leave: the
 /// least, over every link and pair of [`stop_is_clear`]'s test, of the room
-/// it may use over the travel bound it needs (at least 1: clear; 0 for a
-/// stop that does not end within [`MAX_STOP_TICKS`], a room already used
-/// up, or a value that is not a number). The tick chooses how far to slow
-/// its velocity target from it ([`crate::planner`]).
+/// it may use over the travel bound it needs (0 for a stop that does not
+/// end within [`MAX_STOP_TICKS`], a room already used up, or a value that
+/// is not a number). At least 1 means clear, and is then a bound only: a
+/// pair that each joint's travel bound alone clears is left out. The tick
+/// chooses how far to slow its velocity target from a margin below 1
+/// ([`crate::planner`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn stop_margin<const N: usize>(
@@ -99,6 +102,24 @@ pub fn stop_margin<const N: usize>(
     let mut moment = [Vec3::zeros(); N];
     for (j, m) in moment[..n].iter_mut().enumerate() {
         *m = frames.axis(j).cross(&frames.pivot(j));
+    }
+    // The pairs whose gap the stop might close; the others, cleared by
+    // each joint's travel bound alone ([`pair_cleared`]), are not followed
+    // tick by tick (the margin below 1 is the same without them).
+    let mut travel = [0.0f32; N];
+    for (((s, &v), &a), l) in travel[..n]
+        .iter_mut()
+        .zip(after.velocity())
+        .zip(after.acceleration())
+        .zip(limits)
+    {
+        let step = v * dt;
+        let (below, above) = stopping_span(v, a, l, dt);
+        *s = max((step - below).abs(), (step + above).abs());
+    }
+    let mut watched = [false; MAX_CLOSE_PAIRS];
+    for (pair, w) in pairs.iter().zip(watched.iter_mut()) {
+        *w = !pair_cleared(robot, frames, &travel[..n], pair, fraction);
     }
     // Per link with a plane, the most either end moves toward it over the
     // ticks.
@@ -137,7 +158,12 @@ pub fn stop_margin<const N: usize>(
                 }
             }
         }
-        for (pair, rel_sq) in pairs.iter().zip(relative_sq.iter_mut()) {
+        for ((pair, rel_sq), _) in pairs
+            .iter()
+            .zip(relative_sq.iter_mut())
+            .zip(&watched)
+            .filter(|(_, &w)| w)
+        {
             let [a, b] = pair.links;
             let (a, b) = (a as usize, b as usize);
             if let (Some(wa), Some(wb), Some(ba), Some(bb)) =
@@ -190,12 +216,53 @@ pub fn stop_margin<const N: usize>(
             lower(&mut least_sq, d_sq, travel_sq);
         }
     }
-    for (pair, &rel_sq) in pairs.iter().zip(&relative_sq) {
+    for ((pair, &rel_sq), _) in pairs
+        .iter()
+        .zip(&relative_sq)
+        .zip(&watched)
+        .filter(|(_, &w)| w)
+    {
         let need = crate::math::sqrt(rel_sq) + between(robot, &largest[..n], pair.links);
         let gap = max(pair.gap, 0.0);
         lower(&mut least_sq, gap * gap, need * need);
     }
     fraction * crate::math::sqrt(least_sq)
+}
+
+/// Whether the stop cannot bring the pair's later link within its share of
+/// the gap, by each joint's travel bound alone: joint `j` stays within
+/// `travel[j]` of where it is over the tick and the stop, so a point `p`
+/// of link `b` moves against link `a` by at most
+/// `sum_{a < j <= b} travel_j |c_j(p)|` to first order (`c_j(p) = z_j x
+/// (p - o_j)`, revolute; `z_j`, prismatic), a bound of what the simulated
+/// stop finds (the triangle inequality), plus the same second-order term.
+#[inline(never)]
+fn pair_cleared<const N: usize>(
+    robot: &Robot<N>,
+    frames: &Frames<N>,
+    travel: &[f32],
+    pair: &LinkPair,
+    fraction: f32,
+) -> bool {
+    let (a, b) = (pair.links[0] as usize, pair.links[1] as usize);
+    let ends = [frames.pivot(b), frames.link_end(b)];
+    let mut reach = [0.0f32; 2];
+    for j in a + 1..=b {
+        let (Some(joint), Some(&s)) = (robot.joints().get(j), travel.get(j)) else {
+            break;
+        };
+        let (z, o) = (frames.axis(j), frames.pivot(j));
+        for (r, p) in reach.iter_mut().zip(&ends) {
+            let lever = match joint.kind {
+                JointKind::Revolute => crate::math::norm(&z.cross(&(p - o))),
+                JointKind::Prismatic => 1.0,
+            };
+            *r += s * lever;
+        }
+    }
+    let need = max(reach[0], reach[1]) + between(robot, travel, pair.links);
+    // NaN anywhere: not cleared.
+    fraction * max(pair.gap, 0.0) >= need
 }
 
 /// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
@@ -216,6 +283,7 @@ fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) {
 /// The second-order bound `Q` of link `b`'s travel when only the joints
 /// `a + 1 ..= b` move, each by at most `excursion` (step_size's sums from
 /// joint `a + 1` on).
+#[inline(never)]
 fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) -> f32 {
     let (a, b) = (links[0] as usize, links[1] as usize);
     let mut q_sums = SecondOrder::default();
