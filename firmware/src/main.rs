@@ -20,10 +20,10 @@ mod board;
 #[path = "board/nucleo_f446re.rs"]
 mod board;
 
-#[cfg(all(feature = "nucleo-f446re", not(feature = "nopanic")))]
-use {defmt_rtt as _, panic_probe as _};
 #[cfg(all(feature = "mps2-an386", not(feature = "nopanic")))]
 use defmt_semihosting as _;
+#[cfg(all(feature = "nucleo-f446re", not(feature = "nopanic")))]
+use {defmt_rtt as _, panic_probe as _};
 
 /// Panics on QEMU: where and what on stderr, exit status 1
 /// ([`board::panicked`]).
