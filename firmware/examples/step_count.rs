@@ -395,7 +395,7 @@ fn main() -> ! {
     }
     // What the tracker costs (issue 22): the same PIPS + 8, a tracked tick.
     if let Ok(scene) = scenes::pips_tracked(8) {
-        measure("pips_tracked", &scene, overhead, false, 0);
+        measure("pips_tracked", &scene, overhead, true, 0);
     }
     // What each law costs: one step of PIPS with 8 obstacles from the same
     // warmed-up state (the default law's), `joints` = 18.

@@ -355,6 +355,17 @@ pub fn tables(
         opt(counts.get("law_paper", 18, 8, "step"), grouped),
     );
     let _ = writeln!(w);
+    let _ = writeln!(
+        w,
+        "A tracked tick (issue 22, `motion = \"tracked\"`: the law's step, the tracker's candidates and their stop test) of PIPS with 8 obstacles from its warmed-up state: {}; the next {} ticks along the path: mean {}, worst {}, {} candidates refused. The stepped step without self-collision: {}.",
+        opt(counts.get("pips_tracked", 18, 8, "step"), grouped),
+        opt(counts.get("pips_tracked", 18, 8, "window_steps"), grouped),
+        opt(counts.get("pips_tracked", 18, 8, "window_mean"), grouped),
+        opt(counts.get("pips_tracked", 18, 8, "window_max"), grouped),
+        opt(counts.get("pips_tracked", 18, 8, "window_halvings"), grouped),
+        opt(counts.get("pips_self_off", 18, 8, "step"), grouped),
+    );
+    let _ = writeln!(w);
     let _ = writeln!(w, "Every step of the two shipped dead ends, timed one at a time and grouped by what the escape was doing after it (`pips_escape.toml`: a detour round the box, then reached; `pips_dead_end.toml`: no path, so detours and walks until the 64 attempts are spent, the return to the best configuration, `Stalled`). A step's cost is set by its halvings (each one evaluates the arm again; at most `max_halvings` = 8), not by the escape; the steps that start an escape add `Escape::on_stall`, timed alone in the last column from the scene's warmed-up state.");
     let _ = writeln!(w);
     let _ = writeln!(w, "| scenario | obstacles | steps | law alone: mean / max | detour: mean / max | walk: mean / max | search slice: mean / max | searched path: mean / max | return: mean / max | steps that start an escape: count, mean / max | `on_stall` alone: detour / walk |");
