@@ -23,8 +23,8 @@ pub type Mat3 = Matrix3<f32>;
 /// the host's (`tests/`) check it end to end.
 ///
 /// Why hand-written: `f32::sqrt` is `std`-only, `core::f32::math::sqrt`
-/// is unstable, and `libm` has no Arm implementation. The one `unsafe`
-/// item of this crate is the declaration of that two-instruction routine.
+/// is unstable, and `libm` has no Arm implementation. The inline assembly
+/// in `vsqrt` is the one `unsafe` block of this crate.
 #[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
@@ -183,8 +183,8 @@ pub fn min(a: f32, b: f32) -> f32 {
 
 /// `floor(x)` for `x >= 0` (and NaN, which it keeps) by a conversion to an
 /// integer: `libm::floorf` is a call of some 25 instructions on the
-/// Cortex-M4F (no rounding instruction in its FPU), this is two. Not for
-/// negative `x`.
+/// Cortex-M4F (no rounding instruction in its FPU), this is a compare and
+/// two conversions. Not for negative `x`.
 #[inline(always)]
 pub fn floor_non_negative(x: f32) -> f32 {
     // From 2^23 on every f32 is an integer (and infinity stays).
