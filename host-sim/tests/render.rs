@@ -3,20 +3,13 @@
 
 use std::path::Path;
 
-use capp_sim::output::rows_csv;
 use capp_sim::render::{self, plots, views, Canvas, Shape};
 use capp_sim::trajectory::Trajectory;
-use capp_sim::{plan, trajectory, Problem};
+use capp_sim::{trajectory, Problem};
 mod common;
 
 fn payload_bay() -> (Problem, Trajectory) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_payload_bay.toml");
-    let problem = Problem::load(&path).unwrap();
-    let scenario = problem.validate().unwrap();
-    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
-    let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
-    let t = trajectory::parse(&text, Path::new("trajectory.csv")).unwrap();
-    (problem, t)
+    common::planned(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_payload_bay.toml"))
 }
 
 /// Width, height and RGB pixels of a PNG file.

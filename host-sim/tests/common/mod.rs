@@ -66,7 +66,13 @@ pub fn tracked_planar() -> (Problem, Trajectory) {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("planar_tracked.toml");
     std::fs::write(&file, format!("{text}\nmotion = \"tracked\"\n")).unwrap();
-    let problem = Problem::load(&file).unwrap();
+    planned(&file)
+}
+
+/// The scenario file at `path` planned: the problem and its trajectory as
+/// the trajectory file reads back.
+pub fn planned(path: &Path) -> (Problem, Trajectory) {
+    let problem = Problem::load(path).unwrap();
     let scenario = problem.validate().unwrap();
     let result = plan::run(&problem, &scenario, |_| {}).unwrap();
     let csv = rows_csv(problem.joints.len(), &result.rows).unwrap();

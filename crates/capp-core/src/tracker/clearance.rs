@@ -26,7 +26,6 @@
 //! `Q_k` of each joint's largest excursion.
 
 use super::limits::DriveLimits;
-use super::profile::stopping_span;
 use super::DriveState;
 use crate::avoidance::HalfSpace;
 use crate::kinematics::Frames;
@@ -107,16 +106,7 @@ pub fn stop_margin<const N: usize>(
     // each joint's travel bound alone ([`pair_cleared`]), are not followed
     // tick by tick (the margin below 1 is the same without them).
     let mut travel = [0.0f32; N];
-    for (((s, &v), &a), l) in travel[..n]
-        .iter_mut()
-        .zip(after.velocity())
-        .zip(after.acceleration())
-        .zip(limits)
-    {
-        let step = v * dt;
-        let (below, above) = stopping_span(v, a, l, dt);
-        *s = max((step - below).abs(), (step + above).abs());
-    }
+    after.excursion(limits, dt, &mut travel[..n]);
     let mut watched = [false; MAX_CLOSE_PAIRS];
     for (pair, w) in pairs.iter().zip(watched.iter_mut()) {
         *w = !pair_cleared(robot, frames, &travel[..n], pair, fraction);

@@ -41,7 +41,7 @@ pub mod clearance;
 pub mod limits;
 pub mod profile;
 
-use crate::math::min;
+use crate::math::{max, min};
 use limits::DriveLimits;
 
 /// Every joint's velocity (per second) and acceleration (per second
@@ -202,16 +202,19 @@ impl<const N: usize> DriveState<N> {
         }
     }
 
-    /// Each joint's travel bound while it stops from this state
-    /// ([`profile::stopping_travel`]), into `travel`.
-    pub fn stopping_travel(&self, limits: &[DriveLimits], dt: f32, travel: &mut [f32]) {
+    /// Each joint's bound on how far it gets from where it was before the
+    /// tick that ended in this state: the tick (`v dt`) and then the stop at
+    /// the limits ([`profile::stopping_span`], either side), into `travel`.
+    pub fn excursion(&self, limits: &[DriveLimits], dt: f32, travel: &mut [f32]) {
         for (((out, &v), &a), l) in travel
             .iter_mut()
             .zip(self.velocity())
             .zip(self.acceleration())
             .zip(limits)
         {
-            *out = profile::stopping_travel(v, a, l, dt);
+            let step = v * dt;
+            let (below, above) = profile::stopping_span(v, a, l, dt);
+            *out = max((step - below).abs(), (step + above).abs());
         }
     }
 }
