@@ -47,7 +47,7 @@ use crate::mission::Motion;
 use crate::projection::CONTACT_FLOOR;
 use crate::scenario::Scenario;
 use crate::target::{pose_error, Target};
-use crate::tracker::DriveState;
+use crate::tracker::{turnaround_ticks, DriveState};
 use progress::Progress;
 
 /// The planner's mutable state: the joint vector and every buffer a step
@@ -394,7 +394,14 @@ impl<const N: usize> Planner<N> {
         if let Phase::Moving { .. } = self.phase {
             // A refused step left the state as it was, so the next one would
             // be refused the same way: a dead end now, not after the window.
-            if !escaping && (!accepted || self.progress.stalled(settings, self.step)) {
+            // A tracked arm's `V` may rise while its velocity turns to
+            // follow the law: the window waits that long too.
+            let lag = if settings.motion == Motion::Tracked {
+                turnaround_ticks(scenario.drive_limits(), settings.time_step_s)
+            } else {
+                0
+            };
+            if !escaping && (!accepted || self.progress.stalled(settings, self.step, lag)) {
                 self.on_stall(scenario, target);
             }
             if self.step >= settings.max_steps && !self.is_done() {

@@ -55,6 +55,14 @@ impl DriveLimits {
         }
     }
 
+    /// The time (seconds) to turn the joint from full rate one way to full
+    /// rate the other at the limits: `2 max_rate / max_accel` at full
+    /// acceleration, plus `max_accel / max_jerk` for the acceleration's own
+    /// ramps (a trapezoidal acceleration).
+    pub fn turnaround_s(&self) -> f32 {
+        2.0 * self.max_rate / self.max_accel + self.max_accel / self.max_jerk
+    }
+
     /// Every limit finite and positive.
     pub fn validate(&self) -> Result<(), DriveLimitError> {
         if !positive(self.max_rate) {

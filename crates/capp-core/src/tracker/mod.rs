@@ -219,6 +219,29 @@ impl<const N: usize> DriveState<N> {
     }
 }
 
+/// The ticks of `dt` seconds the slowest of `limits` takes to turn around
+/// ([`DriveLimits::turnaround_s`]), rounded up: how long a tracked arm's
+/// velocity lags a law that reverses. At most [`MAX_TURNAROUND_TICKS`]; 0
+/// for a period that is not positive.
+pub fn turnaround_ticks(limits: &[DriveLimits], dt: f32) -> u32 {
+    let slowest = limits
+        .iter()
+        .map(DriveLimits::turnaround_s)
+        .fold(0.0f32, max);
+    let ticks = slowest / dt;
+    if dt.is_nan() || dt <= 0.0 || ticks.is_nan() || ticks <= 0.0 {
+        return 0;
+    }
+    let ticks = min(ticks, MAX_TURNAROUND_TICKS as f32);
+    let whole = crate::math::floor_non_negative(ticks);
+    // `as` saturates: the value is in [0, MAX_TURNAROUND_TICKS] anyway.
+    whole as u32 + u32::from(whole < ticks)
+}
+
+/// The most ticks [`turnaround_ticks`] returns (limits that would take
+/// longer: the stall test still ends).
+pub const MAX_TURNAROUND_TICKS: u32 = 4_096;
+
 /// A velocity error below this fraction of the rate limit is settled.
 const SETTLED: f32 = 1.0e-6;
 

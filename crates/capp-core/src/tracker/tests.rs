@@ -6,7 +6,7 @@ use super::limits::DriveLimits;
 use super::profile::{
     acceleration_for, braking_speed, settle_change, stopping_span, stopping_travel, viable,
 };
-use super::DriveState;
+use super::{turnaround_ticks, DriveState, MAX_TURNAROUND_TICKS};
 use crate::escape::rng::Rng;
 use std::vec;
 use std::vec::Vec;
@@ -636,4 +636,38 @@ fn braking_is_the_move_toward_rest() {
         }
     }
     assert_eq!(compared, 8000);
+}
+
+#[test]
+fn turnaround_ticks_cover_the_slowest_joints_reversal() {
+    // Full rate one way to full rate the other: 2 v / A at full acceleration
+    // plus A / J for its ramps; in ticks, rounded up, for the slowest joint.
+    let mut rng = Rng::seeded(31, &[]);
+    for _ in 0..1_000 {
+        let n = range(&mut rng, 1.0, 7.0) as usize;
+        let limits: Vec<DriveLimits> = (0..n).map(|_| random_limits(&mut rng)).collect();
+        let dt = range(&mut rng, 0.001, 0.2);
+        let slowest = limits
+            .iter()
+            .map(|l| {
+                let (v, a, j) = (l.max_rate as f64, l.max_accel as f64, l.max_jerk as f64);
+                2.0 * v / a + a / j
+            })
+            .fold(0.0f64, f64::max);
+        let ticks = turnaround_ticks(&limits, dt) as f64;
+        let exact = slowest / dt as f64;
+        assert!(
+            ticks >= exact * (1.0 - 1e-5) && ticks < exact * (1.0 + 1e-5) + 1.0,
+            "{ticks} ticks for {exact}"
+        );
+    }
+    let l = DriveLimits::from_rate(1.0);
+    // The defaults: 2 x 0.5 s + 0.1 s = 1.1 s, 22 ticks of 0.05 s (23 if the
+    // quotient rounds above 22).
+    assert!((22..=23).contains(&turnaround_ticks(&[l], 0.05)));
+    assert_eq!(turnaround_ticks(&[l], 0.0), 0);
+    assert_eq!(turnaround_ticks(&[l], -0.05), 0);
+    assert_eq!(turnaround_ticks(&[l], f32::NAN), 0);
+    assert_eq!(turnaround_ticks(&[], 0.05), 0);
+    assert_eq!(turnaround_ticks(&[l], 1e-30), MAX_TURNAROUND_TICKS);
 }
