@@ -76,9 +76,9 @@ pub struct Planner<const N: usize> {
     drive: DriveState<N>,
     /// The velocities the tracker moves toward this tick.
     velocity_target: [f32; N],
-    /// The share of its velocity target the last tick moved toward (or, if
-    /// it braked, the next share it would have tried); the next tick starts
-    /// from it, grown ([`Motion::Tracked`]).
+    /// The share of its velocity target the next tick's first candidate
+    /// moves toward: the last taken share grown by its margin, or after a
+    /// brake the last share tried, grown ([`Motion::Tracked`]).
     share: f32,
 }
 

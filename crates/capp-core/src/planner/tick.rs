@@ -13,8 +13,9 @@
 //!    refused one is tried again toward a share of it: at most half, and
 //!    no more than the room the refused one left allows ([`stop_margin`]),
 //!    so a tick pressed against a surface can still creep along it; at most
-//!    [`MAX_TRIES`] in all. A joint whose stop would leave its range brakes
-//!    instead. A candidate is taken when every joint's excursion (this
+//!    [`MAX_TRIES`] in all; the first starts from the last taken share,
+//!    grown by the margin that tick left (`growth`). A joint whose stop
+//!    would leave its range brakes instead. A candidate is taken when every joint's excursion (this
 //!    tick's motion and the stop after it) keeps every link within its room
 //!    ([`crate::tracker::clearance`]) and the configuration it reaches is
 //!    clear and not creeping onto a surface.
@@ -30,7 +31,7 @@ use crate::planner::waypoints;
 use crate::projection::CONTACT_FLOOR;
 use crate::scenario::Scenario;
 use crate::target::Target;
-use crate::tracker::clearance::stop_margin;
+use crate::tracker::clearance::{stop_margin, EXACT_MARGIN};
 use crate::tracker::profile::{braking_speed, stopping_span};
 use crate::tracker::DriveState;
 
@@ -44,10 +45,12 @@ const SHARE_BACKOFF: f32 = 0.9;
 /// ... as does this: each try at least halves it.
 const MAX_SHARE_STEP: f32 = 0.5;
 
-/// A tick's first candidate moves toward this times the last tick's share
-/// (at most all) of its velocity target: near a surface the speed the room
-/// allows changes little from tick to tick, and starting there spares the
-/// refused candidates (and the braking between them) of starting at full.
+/// After a tick that braked, the next tick's first candidate moves toward
+/// this times the last share tried (at most all) of its velocity target:
+/// near a surface the speed the room allows changes little from tick to
+/// tick, and starting there spares the refused candidates (and the braking
+/// between them) of starting at full. After a taken tick, the growth is
+/// [`growth`] of its margin.
 const SHARE_GROWTH: f32 = 1.25;
 
 /// No candidate slower than this share of the velocity target is tried
@@ -57,6 +60,19 @@ const MIN_SHARE: f32 = 1.0 / 1024.0;
 /// A joint is at rest when its speed is below this fraction of its rate
 /// limit (and its acceleration below this fraction of its limit).
 pub const REST_FRACTION: f32 = 0.01;
+
+/// How much faster than a taken tick (as a share of the velocity target)
+/// the next tick's first candidate goes, from the taken tick's stop margin
+/// `m` (at least 1): `sqrt(SHARE_BACKOFF m)`, with `m` at most
+/// [`EXACT_MARGIN`], where the margin is exact. A stop's travel grows
+/// between linearly and quadratically with the speed, so this aims the next
+/// tick's margin at about `1 / SHARE_BACKOFF` when the room stays: fast
+/// where there is room (up to 1.42x a tick), slowing a little as the room
+/// closes in, instead of speeding up by a fixed factor until a refusal
+/// brakes the arm.
+fn growth(m: f32) -> f32 {
+    crate::math::sqrt(SHARE_BACKOFF * min(m, EXACT_MARGIN))
+}
 
 impl<const N: usize> Planner<N> {
     /// Whether the arm is at rest ([`REST_FRACTION`]); always, with
@@ -117,7 +133,7 @@ impl<const N: usize> Planner<N> {
         let floor = CONTACT_FLOOR * settings.avoidance.engage_clearance;
         let fraction = settings.avoidance.advance_fraction;
         let mut refused = 0u8;
-        let mut share = min(self.share * SHARE_GROWTH, 1.0).max(MIN_SHARE);
+        let mut share = min(self.share, 1.0).max(MIN_SHARE);
         for _ in 0..MAX_TRIES {
             let mut target = self.velocity_target;
             target[..n].iter_mut().for_each(|t| *t *= share);
@@ -143,7 +159,7 @@ impl<const N: usize> Planner<N> {
                     .evaluate(scenario, &self.q_next[..n], drive_target);
                 let (now, candidate) = (self.evals.now(), self.evals.next());
                 if candidate.safe_after(now.closest(), floor) && all_finite(&self.q_next[..n]) {
-                    self.share = share;
+                    self.share = share * growth(margin);
                     self.commit(next);
                     return (true, dt, refused);
                 }
@@ -160,7 +176,7 @@ impl<const N: usize> Planner<N> {
                 break;
             }
         }
-        self.share = share;
+        self.share = share * SHARE_GROWTH;
         // Brake: the stop the last tick cleared.
         let moving = !self.drive.is_at_rest(limits, 0.0);
         self.brake(scenario, drive_target);

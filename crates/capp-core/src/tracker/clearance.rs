@@ -34,6 +34,10 @@ use crate::robot::{JointKind, Robot};
 use crate::self_collision::field::{LinkPair, MAX_CLOSE_PAIRS};
 use crate::step_size::SecondOrder;
 
+/// [`stop_margin`] is exact below this margin (at and above it, a lower
+/// bound): the tick grows its speed by up to its square root.
+pub const EXACT_MARGIN: f32 = 2.25;
+
 /// Most ticks of a stop the test simulates; a stop that has not reached
 /// rest by then is not cleared.
 pub const MAX_STOP_TICKS: usize = 128;
@@ -71,10 +75,11 @@ pub fn stop_is_clear<const N: usize>(
 /// least, over every link and pair of [`stop_is_clear`]'s test, of the room
 /// it may use over the travel bound it needs (0 for a stop that does not
 /// end within [`MAX_STOP_TICKS`], a room already used up, or a value that
-/// is not a number). At least 1 means clear, and is then a bound only: a
-/// pair that each joint's travel bound alone clears is left out. The tick
-/// chooses how far to slow its velocity target from a margin below 1
-/// ([`crate::planner`]).
+/// is not a number). At least 1 means clear. Below [`EXACT_MARGIN`] it is
+/// exact; from there on a lower bound of the true margin only: a pair that
+/// each joint's travel bound alone clears with that much to spare is left
+/// out. The tick chooses how far to slow its velocity target from a margin
+/// below 1, and how fast to speed up from one above ([`crate::planner`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn stop_margin<const N: usize>(
@@ -102,14 +107,15 @@ pub fn stop_margin<const N: usize>(
     for (j, m) in moment[..n].iter_mut().enumerate() {
         *m = frames.axis(j).cross(&frames.pivot(j));
     }
-    // The pairs whose gap the stop might close; the others, cleared by
-    // each joint's travel bound alone ([`pair_cleared`]), are not followed
-    // tick by tick (the margin below 1 is the same without them).
+    // The pairs whose gap the stop might close; the others, cleared with
+    // [`EXACT_MARGIN`] to spare by each joint's travel bound alone
+    // ([`pair_cleared`]), are not followed tick by tick (a margin below
+    // `EXACT_MARGIN` is the same without them).
     let mut travel = [0.0f32; N];
     after.excursion(limits, dt, &mut travel[..n]);
     let mut watched = [false; MAX_CLOSE_PAIRS];
     for (pair, w) in pairs.iter().zip(watched.iter_mut()) {
-        *w = !pair_cleared(robot, frames, &travel[..n], pair, fraction);
+        *w = !pair_cleared(robot, frames, &travel[..n], pair, fraction / EXACT_MARGIN);
     }
     // Per link with a plane, the most either end moves toward it over the
     // ticks.
