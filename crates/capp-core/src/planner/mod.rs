@@ -396,10 +396,9 @@ impl<const N: usize> Planner<N> {
             // be refused the same way: a dead end now, not after the window.
             // A tracked arm's `V` may rise while its velocity turns to
             // follow the law: the window waits that long too.
-            let lag = if settings.motion == Motion::Tracked {
-                turnaround_ticks(scenario.drive_limits(), settings.time_step_s)
-            } else {
-                0
+            let lag = || match settings.motion {
+                Motion::Tracked => turnaround_ticks(scenario.drive_limits(), settings.time_step_s),
+                Motion::Stepped => 0,
             };
             if !escaping && (!accepted || self.progress.stalled(settings, self.step, lag)) {
                 self.on_stall(scenario, target);

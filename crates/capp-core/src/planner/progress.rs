@@ -40,17 +40,19 @@ impl Progress {
     /// Whether the law has made no progress for long enough to call it a
     /// dead end at `step`: the escape's window for the damped law, which
     /// converges in tens of steps; the stall window for the first-order
-    /// laws, which creep (and for every law with escapes off). `lag` steps
-    /// are added to the window: a tracked arm's turnaround
+    /// laws, which creep (and for every law with escapes off). `lag()`
+    /// steps are added to the window: a tracked arm's turnaround
     /// ([`crate::tracker::turnaround_ticks`]), in which `V` may rise while
-    /// the drive catches up with a law that has turned.
-    pub fn stalled(&self, settings: &Settings, step: u32, lag: u32) -> bool {
+    /// the drive catches up with a law that has turned; it is asked for
+    /// only once the window itself has passed without progress.
+    pub fn stalled(&self, settings: &Settings, step: u32, lag: impl FnOnce() -> u32) -> bool {
         let fast = settings.law.kind == LawKind::DampedLeastSquares;
         let window = if settings.escape.attempts > 0 && fast {
             settings.escape.window as u32
         } else {
             settings.stall_window
         };
-        step - self.best_step >= window.saturating_add(lag)
+        let waited = step - self.best_step;
+        waited >= window && waited >= window.saturating_add(lag())
     }
 }
