@@ -80,7 +80,7 @@ pub fn dot_slice(a: &[f32], b: &[f32]) -> f32 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Largest `|x|` [`sin_cos`] reduces itself; beyond it (and for NaN) it calls `libm`.
+/// Largest `|x|` [`sin_cos`] reduces by Cody-Waite; beyond it, by `fmodf`.
 pub const SIN_COS_FAST_RANGE: f32 = 8192.0;
 
 /// `(sin x, cos x)` in `f32` arithmetic only, for the per-step joint angles.
@@ -93,14 +93,27 @@ pub const SIN_COS_FAST_RANGE: f32 = 8192.0;
 /// minimax polynomials for `sin r` and `cos r` on `|r| <= pi/4` (error about
 /// 1 ulp of the result, tested against `f64` below), and the quadrant `j mod 4`.
 /// About 40 instructions on the M4F.
+///
+/// Beyond [`SIN_COS_FAST_RANGE`] (no joint angle gets there: revolute limits
+/// and DH angles are within [`crate::robot::MAX_ANGLE`]) the angle is first
+/// taken modulo the `f32` nearest `2 pi` (`fmodf`, exact): an error of
+/// `x 2.8e-8` rad, under a quarter of `x`'s own ulp, so the input's rounding
+/// already says more. NaN and infinities give NaN. Every angle of the core
+/// goes through here, not `libm::sincosf`, which evaluates in `f64` and
+/// takes 7 KB of the board's flash with the `f64` arithmetic it calls.
 #[inline]
 pub fn sin_cos(x: f32) -> (f32, f32) {
     // The three parts of pi/2: 8, 11 and 24 significant bits.
     const PIO2_HI: f32 = 1.570_312_5;
     const PIO2_MID: f32 = 4.837_513e-4;
     const PIO2_LO: f32 = 7.549_79e-8;
-    if x.is_nan() || x.abs() > SIN_COS_FAST_RANGE {
-        return libm::sincosf(x);
+    let x = if x.abs() <= SIN_COS_FAST_RANGE {
+        x
+    } else {
+        wrap_turns(x)
+    };
+    if x.is_nan() {
+        return (f32::NAN, f32::NAN);
     }
     let half = if x < 0.0 { -0.5 } else { 0.5 };
     let j = (x * core::f32::consts::FRAC_2_PI + half) as i32;
@@ -118,6 +131,14 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     }
 }
 
+/// `x` (beyond [`SIN_COS_FAST_RANGE`], or not finite) modulo the `f32`
+/// nearest `2 pi`: within `(-2 pi, 2 pi)`, NaN for NaN and infinities.
+#[cold]
+#[inline(never)]
+fn wrap_turns(x: f32) -> f32 {
+    libm::fmodf(x, core::f32::consts::TAU)
+}
+
 /// `Vec3` from an array.
 #[inline]
 pub fn vec3(a: [f32; 3]) -> Vec3 {
@@ -128,9 +149,9 @@ pub fn vec3(a: [f32; 3]) -> Vec3 {
 /// CAPP.c builds it. A vector in the rotated (obstacle) frame maps to the world
 /// as `R x`; the world point `p` is `x = R^T (p - c)` in the obstacle's frame.
 pub fn rotation_123(rx: f32, ry: f32, rz: f32) -> Mat3 {
-    let (sx, cx) = libm::sincosf(rx);
-    let (sy, cy) = libm::sincosf(ry);
-    let (sz, cz) = libm::sincosf(rz);
+    let (sx, cx) = sin_cos(rx);
+    let (sy, cy) = sin_cos(ry);
+    let (sz, cz) = sin_cos(rz);
     Mat3::new(
         cz * cy,
         cz * sy * sx - sz * cx,
@@ -259,10 +280,35 @@ mod tests {
             x += 0.000_37;
         }
         assert!(worst < 2.0 * f32::EPSILON as f64, "worst error {worst}");
-        for x in [1.0e4f32, -3.0e5, f32::INFINITY, f32::NAN] {
+        // Across the Cody-Waite range.
+        let mut x = 20.0f32;
+        while x <= SIN_COS_FAST_RANGE {
+            for y in [x, -x] {
+                let (s, c) = sin_cos(y);
+                let (se, ce) = (y as f64).sin_cos();
+                let err = (s as f64 - se).abs().max((c as f64 - ce).abs());
+                assert!(err < 2.0 * f32::EPSILON as f64, "{y}: error {err}");
+            }
+            x = x * 1.013 + 0.001;
+        }
+        // Beyond it: within the angle's own half ulp.
+        let mut x = SIN_COS_FAST_RANGE.next_up();
+        while x < 1.0e12 {
+            for y in [x, -x] {
+                let (s, c) = sin_cos(y);
+                let (se, ce) = (y as f64).sin_cos();
+                let err = (s as f64 - se).abs().max((c as f64 - ce).abs());
+                let half_ulp = (y.abs().next_up() - y.abs()) as f64 / 2.0;
+                assert!(
+                    err <= half_ulp + 4.0 * f32::EPSILON as f64,
+                    "{y}: error {err}"
+                );
+            }
+            x = x * 1.07 + 0.3;
+        }
+        for x in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
             let (s, c) = sin_cos(x);
-            let (ls, lc) = libm::sincosf(x);
-            assert_eq!((s.to_bits(), c.to_bits()), (ls.to_bits(), lc.to_bits()));
+            assert!(s.is_nan() && c.is_nan());
         }
         assert_eq!(sin_cos(0.0), (0.0, 1.0));
     }

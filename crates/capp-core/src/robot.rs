@@ -338,8 +338,8 @@ impl<const N: usize> Robot<N> {
             if !(j.weight > 0.0 && j.weight <= 1.0) {
                 return Err(RobotError::WeightOutOfRange { joint });
             }
-            let (sin_alpha, cos_alpha) = libm::sincosf(j.alpha);
-            let (sin_theta, cos_theta) = libm::sincosf(j.theta);
+            let (sin_alpha, cos_alpha) = crate::math::sin_cos(j.alpha);
+            let (sin_theta, cos_theta) = crate::math::sin_cos(j.theta);
             // The link from o_j to o_{j+1} is `d z + a x`: |.| = sqrt(a^2 + d^2).
             let d = match j.kind {
                 JointKind::Revolute => j.d.abs(),
