@@ -364,6 +364,7 @@ pub fn potential_gradient<const N: usize>(
 /// against `obstacle` inflated by the larger of the two margins (so it holds
 /// for every point of the link, of either kind), or `None` when the point is
 /// inside that inflation (no such half-space) or out of its influence.
+#[inline(never)]
 fn half_space<const N: usize>(
     frames: &Frames<N>,
     obstacles: &[Obstacle],
@@ -373,26 +374,49 @@ fn half_space<const N: usize>(
     obstacle: u8,
     others_sq: f32,
 ) -> Option<HalfSpace> {
-    let per = settings.points_per_link_total();
-    let index = (point as usize).checked_sub(link as usize * per)?;
-    let p = link_points(frames, settings, link as usize)
-        .nth(index)?
-        .position;
     let larger = if settings.joint_margin >= settings.link_margin {
         PointKind::Joint
     } else {
         PointKind::Link
     };
-    let contact = obstacles.get(obstacle as usize)?.contact(&p, larger)?;
+    let (p, normal, depth) =
+        surface_normal(frames, obstacles, settings, point, obstacle, Some(larger))?;
+    Some(HalfSpace {
+        link,
+        normal: [normal.x, normal.y, normal.z],
+        offset: normal.dot(&p) - depth,
+        others_sq,
+    })
+}
+
+/// At avoidance point `point` against `obstacle` inflated by the margin of
+/// `kind` (the point's own with `None`): the point's position, the unit
+/// normal `grad C / |grad C|` (eq. 25) and the lower bound `(C - 1) / |grad
+/// C|` on its distance to that inflation (length units); `None` when the
+/// point is on or inside it, or out of its influence.
+// Not inlined: one copy of the pair code for its two callers.
+#[inline(never)]
+pub fn surface_normal<const N: usize>(
+    frames: &Frames<N>,
+    obstacles: &[Obstacle],
+    settings: &AvoidanceSettings,
+    point: u16,
+    obstacle: u8,
+    kind: Option<PointKind>,
+) -> Option<(Vec3, Vec3, f32)> {
+    let per = settings.points_per_link_total().max(1);
+    let link = point as usize / per;
+    let at = link_points(frames, settings, link).nth(point as usize - link * per)?;
+    let contact = obstacles
+        .get(obstacle as usize)?
+        .contact(&at.position, kind.unwrap_or(at.kind))?;
     let slope = norm(&contact.gradient);
     if !(contact.clearance > 0.0 && contact.clearance.is_finite() && slope > 0.0) {
         return None;
     }
-    let normal = contact.gradient / slope;
-    Some(HalfSpace {
-        link,
-        normal: [normal.x, normal.y, normal.z],
-        offset: normal.dot(&p) - contact.clearance / slope,
-        others_sq,
-    })
+    Some((
+        at.position,
+        contact.gradient / slope,
+        contact.clearance / slope,
+    ))
 }

@@ -10,30 +10,39 @@
 //!    alone so it can stop before its limit. At the final target, within
 //!    tolerance, the target is rest.
 //! 2. **Candidates**: the tracker's next tick toward that target; a
-//!    refused one is tried again toward a share of it: at most three
-//!    quarters, and no more than the room the refused one left allows
-//!    ([`stop_margin`]), so a tick pressed against a surface can still
-//!    creep along it; at most [`MAX_TRIES`] in all; the first starts from
-//!    the last taken share, grown by the margin that tick left (`growth`).
-//!    A joint whose stop would leave its range brakes instead. A candidate
-//!    is taken when every joint's excursion (this tick's motion and the
-//!    stop after it) keeps every link within its room
+//!    refused one is tried again, at most [`MAX_TRIES`] in all; the first
+//!    starts from the last taken share, grown by the margin that tick left
+//!    (`growth`). A joint whose stop would leave its range brakes instead.
+//!    A candidate is taken when every joint's excursion (this tick's motion
+//!    and the stop after it) keeps every link within its room
 //!    ([`crate::tracker::clearance`]) and the configuration it reaches is
-//!    clear and not creeping onto a surface.
+//!    clear and not creeping onto a surface. The next try after a refusal:
+//!    * a link end whose stop would close on its obstacle's half-space, or
+//!      a configuration creeping onto the closest obstacle: that point's
+//!      approach is taken out of the target ([`slide`]), at three quarters
+//!      of the speed reached;
+//!    * otherwise a share of the speed the refused one reached
+//!      ([`DriveState::reached_share`]): at most three quarters, and no
+//!      more than the room it left allows ([`stop_margin`]).
 //! 3. **Otherwise brake**: the next tick of the stop the last taken tick
-//!    cleared (at rest: stay). A tick that neither moved nor could move is
-//!    refused, and the planner treats it as a dead end, as a refused step.
+//!    cleared (at rest: stay, and time runs). An arm at rest that could not
+//!    move even at the least share ([`MIN_SHARE`]) is refused, and the
+//!    planner treats it as a dead end, as a refused step; at a larger share
+//!    it holds, and the next tick tries from that share.
 
 use super::Planner;
+use crate::avoidance::surface_normal;
 use crate::control::{Drive, Proposal};
+use crate::evaluation::Evaluation;
 use crate::math::{all_finite, min};
 use crate::mission::Motion;
 use crate::planner::waypoints;
 use crate::projection::CONTACT_FLOOR;
 use crate::scenario::Scenario;
 use crate::target::Target;
-use crate::tracker::clearance::{stop_margin, EXACT_MARGIN};
+use crate::tracker::clearance::{stop_margin, Approach, EXACT_MARGIN};
 use crate::tracker::profile::{braking_speed, stopping_span};
+use crate::tracker::slide::slide;
 use crate::tracker::DriveState;
 
 /// Most candidates a tick tries before braking.
@@ -75,6 +84,32 @@ pub const REST_FRACTION: f32 = 0.01;
 /// brakes the arm.
 fn growth(m: f32) -> f32 {
     crate::math::sqrt(SHARE_BACKOFF * min(m, EXACT_MARGIN))
+}
+
+/// The arm's closest avoidance point and obstacle in `now` as an
+/// [`Approach`]: the point, its link, and the direction in which its `C`
+/// grows (eq. 25's gradient, normalised), to slide along when a candidate
+/// would creep onto that obstacle (`None`: the closest pair is two links,
+/// or none is within influence).
+fn closest_approach<const N: usize, const M: usize, const W: usize>(
+    scenario: &Scenario<N, M, W>,
+    now: &Evaluation<N>,
+) -> Option<Approach> {
+    let closest = now.field.clearance?;
+    let settings = &scenario.settings().avoidance;
+    let (point, normal, _) = surface_normal(
+        &now.frames,
+        scenario.obstacles(),
+        settings,
+        closest.point,
+        closest.obstacle,
+        None,
+    )?;
+    Some(Approach {
+        link: closest.point as usize / settings.points_per_link_total().max(1),
+        point,
+        normal,
+    })
 }
 
 impl<const N: usize> Planner<N> {
@@ -137,13 +172,14 @@ impl<const N: usize> Planner<N> {
         let fraction = settings.avoidance.advance_fraction;
         let mut refused = 0u8;
         let mut share = min(self.share, 1.0).max(MIN_SHARE);
+        let mut aim = self.velocity_target;
         for _ in 0..MAX_TRIES {
-            let mut target = self.velocity_target;
+            let mut target = aim;
             target[..n].iter_mut().for_each(|t| *t *= share);
             let mut next = self.drive.toward(limits, dt, &target[..n]);
             self.keep_in_range(scenario, &mut next);
             let now = self.evals.now();
-            let margin = stop_margin(
+            let stop = stop_margin(
                 robot,
                 &now.frames,
                 &now.distance_sq[..n],
@@ -154,6 +190,7 @@ impl<const N: usize> Planner<N> {
                 dt,
                 fraction,
             );
+            let margin = stop.margin;
             if margin >= 1.0 {
                 next.advance(&self.q[..n], dt, &mut self.q_next[..n]);
                 self.clamp_next(scenario);
@@ -166,13 +203,28 @@ impl<const N: usize> Planner<N> {
                     self.commit(next);
                     return (true, dt, refused);
                 }
-                share *= MAX_SHARE_STEP;
+                // Creeping onto the closest obstacle: slide along it.
+                if let Some(approach) = closest_approach(scenario, now) {
+                    slide(robot, limits, &now.frames, &approach, &mut aim[..n]);
+                }
+                share = next.reached_share(&aim[..n], share) * MAX_SHARE_STEP;
             } else {
-                // A stop's travel grows at least linearly with the share,
-                // so the margin's share of this one is the most that could
-                // fit (less what the current motion cannot shed in one tick:
-                // the backoff), and each try cuts it by a quarter at least.
-                share *= min(margin * SHARE_BACKOFF, MAX_SHARE_STEP);
+                // A link end that would close on its half-space slides
+                // along it instead, at three quarters of the speed.
+                // Otherwise a stop's travel grows at least linearly with
+                // the share, so the margin's share of this one is the most
+                // that could fit (less what the current motion cannot shed
+                // in one tick: the backoff), and each try cuts it by a
+                // quarter at least.
+                let slid = stop
+                    .approach
+                    .is_some_and(|a| slide(robot, limits, &now.frames, &a, &mut aim[..n]));
+                let cut = if slid {
+                    MAX_SHARE_STEP
+                } else {
+                    min(margin * SHARE_BACKOFF, MAX_SHARE_STEP)
+                };
+                share = next.reached_share(&aim[..n], share) * cut;
             }
             refused = refused.saturating_add(1);
             if share < MIN_SHARE {
@@ -180,10 +232,13 @@ impl<const N: usize> Planner<N> {
             }
         }
         self.share = share * SHARE_GROWTH;
-        // Brake: the stop the last tick cleared.
+        // Brake: the stop the last tick cleared. An arm at rest whose
+        // candidates were all refused holds this tick; it may still move at
+        // the smaller share the next tick starts from, so it is a dead end
+        // only once no share above the least may be tried.
         let moving = !self.drive.is_at_rest(limits, 0.0);
         self.brake(scenario, drive_target);
-        (moving, dt, refused)
+        (moving || share >= MIN_SHARE, dt, refused)
     }
 
     /// A tick of the stop at the limits (nothing, at rest), evaluated

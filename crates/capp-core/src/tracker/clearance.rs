@@ -42,6 +42,30 @@ pub const EXACT_MARGIN: f32 = 2.25;
 /// rest by then is not cleared.
 pub const MAX_STOP_TICKS: usize = 128;
 
+/// The term that bound a [`stop_margin`] when it was a link end moving
+/// toward its obstacle's half-space: the one direction the tick can take out
+/// of its velocity target to slide along the surface instead (the other
+/// terms bound a travel in any direction).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Approach {
+    /// The link (0-based joint).
+    pub link: usize,
+    /// The link's end that approaches, where it is now (world frame),
+    /// length units.
+    pub point: Vec3,
+    /// The half-space's outward unit normal (world frame).
+    pub normal: Vec3,
+}
+
+/// [`stop_margin`]'s answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StopMargin {
+    /// The least room over need (at least 1: clear).
+    pub margin: f32,
+    /// The term that set it, when a link end's approach to its half-space.
+    pub approach: Option<Approach>,
+}
+
 /// Whether the tick to `after` (the drive state at the tick's end) and the
 /// stop from there keep every link within `fraction` of its room
 /// (`distance_sq`, its square, one per link) and every pair of `pairs`
@@ -68,7 +92,9 @@ pub fn stop_is_clear<const N: usize>(
         limits,
         dt,
         fraction,
-    ) >= 1.0
+    )
+    .margin
+        >= 1.0
 }
 
 /// How much room the tick to `after` and the stop from there leave: the
@@ -92,7 +118,7 @@ pub fn stop_margin<const N: usize>(
     limits: &[DriveLimits],
     dt: f32,
     fraction: f32,
-) -> f32 {
+) -> StopMargin {
     let n = robot.len().min(N).min(distance_sq.len());
     // Squares of the largest travels, per link and per pair: square roots
     // once, at the end (the same bits: a correctly rounded root is
@@ -176,13 +202,19 @@ pub fn stop_margin<const N: usize>(
         }
         ticks += 1;
         if ticks > MAX_STOP_TICKS {
-            return 0.0;
+            return StopMargin {
+                margin: 0.0,
+                approach: None,
+            };
         }
         state.brake(limits, dt);
     }
     // Second order: Q_k of the largest excursions (step_size's sums).
     // The least room over need, squared (a NaN anywhere gives 0).
     let mut least_sq = f32::INFINITY;
+    // The term that set it, when a link end's approach to its half-space:
+    // the link and the end (0 its pivot, 1 its far end).
+    let mut bound: Option<(usize, usize)> = None;
     let mut q_sums = SecondOrder::default();
     for (k, ((joint, link), ((&size, &f_sq), &d_sq))) in robot
         .joints()
@@ -200,16 +232,20 @@ pub fn stop_margin<const N: usize>(
             let rooms = [frames.pivot(k), frames.link_end(k)].map(|p| normal.dot(&p) - h.offset);
             if rooms.iter().all(|&r| r > 0.0) {
                 slid = true;
-                lower(&mut least_sq, h.others_sq, travel_sq);
+                if lower(&mut least_sq, h.others_sq, travel_sq) {
+                    bound = None;
+                }
                 let toward = toward.get(k).copied().unwrap_or([f32::INFINITY; 2]);
-                for (&t, room) in toward.iter().zip(rooms) {
+                for (end, (&t, room)) in toward.iter().zip(rooms).enumerate() {
                     let need = t + second;
-                    lower(&mut least_sq, room * room, need * need);
+                    if lower(&mut least_sq, room * room, need * need) {
+                        bound = Some((k, end));
+                    }
                 }
             }
         }
-        if !slid {
-            lower(&mut least_sq, d_sq, travel_sq);
+        if !slid && lower(&mut least_sq, d_sq, travel_sq) {
+            bound = None;
         }
     }
     for ((pair, &rel_sq), _) in pairs
@@ -220,9 +256,26 @@ pub fn stop_margin<const N: usize>(
     {
         let need = crate::math::sqrt(rel_sq) + between(robot, &largest[..n], pair.links);
         let gap = max(pair.gap, 0.0);
-        lower(&mut least_sq, gap * gap, need * need);
+        if lower(&mut least_sq, gap * gap, need * need) {
+            bound = None;
+        }
     }
-    fraction * crate::math::sqrt(least_sq)
+    let approach = bound.and_then(|(k, end)| {
+        let h = planes.get(k).copied().flatten()?;
+        Some(Approach {
+            link: k,
+            point: if end == 0 {
+                frames.pivot(k)
+            } else {
+                frames.link_end(k)
+            },
+            normal: Vec3::new(h.normal[0], h.normal[1], h.normal[2]),
+        })
+    });
+    StopMargin {
+        margin: fraction * crate::math::sqrt(least_sq),
+        approach,
+    }
 }
 
 /// Whether the stop cannot bring the pair's later link within its share of
@@ -262,18 +315,20 @@ fn pair_cleared<const N: usize>(
 }
 
 /// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
-/// a NaN, so a bad value is never clear).
+/// a NaN, so a bad value is never clear). Returns whether it went lower.
 #[inline(never)]
-fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) {
+fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) -> bool {
     if need_sq == 0.0 && room_sq >= 0.0 {
-        return;
+        return false;
     }
     let ratio = room_sq / need_sq;
+    let before = *least_sq;
     *least_sq = if ratio >= 0.0 {
         min(*least_sq, ratio)
     } else {
         0.0
     };
+    *least_sq < before
 }
 
 /// The second-order bound `Q` of link `b`'s travel when only the joints

@@ -10,6 +10,7 @@
 //!   can still stop within its limits, and a bound on its stopping travel;
 //! * [`clearance`]: conservative advancement for a tick and the stop after
 //!   it;
+//! * [`slide`]: a velocity target less one point's approach to a surface;
 //! * [`DriveState`]: every joint's velocity and acceleration, the next tick
 //!   toward the law's rates (time-synchronised), the next tick of a stop,
 //!   and each joint's travel bound for the tick and the stop after it.
@@ -40,6 +41,7 @@
 pub mod clearance;
 pub mod limits;
 pub mod profile;
+pub mod slide;
 
 use crate::math::{max, min};
 use limits::DriveLimits;
@@ -72,6 +74,32 @@ impl<const N: usize> DriveState<N> {
     /// The joints' accelerations, per second squared.
     pub fn acceleration(&self) -> &[f32] {
         &self.acceleration[..self.n.min(N)]
+    }
+
+    /// How much of the velocity target `target` this state (a tick toward
+    /// `share` of it) reached: `share`, or less where the limits held every
+    /// joint below it (the largest `|v_j / target_j|` over the joints with a
+    /// target). From rest the jerk
+    /// limit holds the first tick to the same small motion whatever the
+    /// share above a few percent, so a refused tick's next try is cut from
+    /// the speed it reached, not from the one it was aimed at.
+    pub fn reached_share(&self, target: &[f32], share: f32) -> f32 {
+        let mut reached: Option<f32> = None;
+        for (&v, &t) in self.velocity().iter().zip(target) {
+            if t == 0.0 {
+                continue;
+            }
+            let r = (v / t).abs();
+            if r.is_nan() {
+                return share;
+            }
+            reached = Some(max(reached.unwrap_or(0.0), r));
+        }
+        // No joint aimed anywhere, or NaN: the share as it was.
+        match reached {
+            Some(r) if r < share => r,
+            _ => share,
+        }
     }
 
     /// Whether every joint's `|velocity|` is at most `fraction` of its rate

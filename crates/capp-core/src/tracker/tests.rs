@@ -590,7 +590,8 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
             &limits,
             dt,
             fraction,
-        );
+        )
+        .margin;
         assert!(margin >= 0.0, "margin {margin}");
         // Exact below EXACT_MARGIN, clear or not (the tick's growth reads
         // margins above 1 too).
@@ -675,4 +676,128 @@ fn turnaround_ticks_cover_the_slowest_joints_reversal() {
     assert_eq!(turnaround_ticks(&[l], f32::NAN), 0);
     assert_eq!(turnaround_ticks(&[], 0.05), 0);
     assert_eq!(turnaround_ticks(&[l], 1e-30), MAX_TURNAROUND_TICKS);
+}
+
+/// [`super::slide::slide`] against forward kinematics: a point of a random
+/// link, a random normal and a random velocity target within the rates;
+/// moved a little along the slid target, the point goes along the surface
+/// (its motion along the normal a small fraction of what the target gave
+/// it), every joint stays within its rate, and a target that did not
+/// approach is left as it was.
+#[test]
+fn a_slid_target_moves_the_point_along_the_surface_not_into_it() {
+    use super::clearance::Approach;
+    use super::slide::slide;
+    use crate::kinematics::{forward_kinematics, Frames};
+    use crate::math::Vec3;
+    let mut rng = Rng::seeded(23, &[]);
+    let (mut slid, mut left) = (0, 0);
+    for _ in 0..400 {
+        let MovingArm {
+            n,
+            robot,
+            limits,
+            q,
+            frames,
+            ..
+        } = MovingArm::random(&mut rng);
+        let link = (range(&mut rng, 0.0, n as f32) as usize).min(n - 1);
+        let t = range(&mut rng, 0.0, 1.0);
+        let on = |f: &Frames<N>| f.pivot(link) + (f.link_end(link) - f.pivot(link)) * t;
+        let normal = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()).normalize();
+        let approach = Approach {
+            link,
+            point: on(&frames),
+            normal,
+        };
+        let aim: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
+        // The point's motion along the normal for a displacement eps * x.
+        let eps = 1e-3;
+        let mut moved = Frames::<N>::default();
+        let mut along = |x: &[f32]| {
+            let qx: Vec<f32> = q.iter().zip(x).map(|(q, x)| q + eps * x).collect();
+            forward_kinematics(&robot, &qx, &mut moved);
+            normal.dot(&(on(&moved) - on(&frames))) / eps
+        };
+        let before = along(&aim);
+        let mut after_aim = aim.clone();
+        if slide(&robot, &limits, &frames, &approach, &mut after_aim) {
+            slid += 1;
+            assert!(before < 1e-2, "slid a target that moved away: {before}");
+            let after = along(&after_aim);
+            let speed = aim.iter().map(|a| a * a).sum::<f32>().sqrt();
+            assert!(
+                after.abs() <= 0.02 * before.abs() + 1e-3 * speed.max(1.0),
+                "still approaching: {after} (was {before})"
+            );
+            for (a, l) in after_aim.iter().zip(&limits) {
+                assert!(
+                    a.abs() <= l.max_rate * (1.0 + 1e-6),
+                    "{a} over {}",
+                    l.max_rate
+                );
+            }
+        } else {
+            left += 1;
+            assert_eq!(after_aim, aim);
+            assert!(before > -1e-2, "an approach left alone: {before}");
+        }
+    }
+    assert!(slid > 100 && left > 100, "slid {slid}, left {left}");
+}
+
+/// [`DriveState::reached_share`]: from rest one tick toward a target far
+/// above what the jerk limit allows reaches only a small share of it (the
+/// largest `|v / target|`); a tick that reached its share, a target of
+/// zeros or NaN give the share as it was.
+#[test]
+fn a_tick_from_rest_reaches_a_small_share_of_a_large_target() {
+    let mut rng = Rng::seeded(29, &[]);
+    for _ in 0..500 {
+        let n = 1 + range(&mut rng, 0.0, 6.0) as usize;
+        let limits: Vec<DriveLimits> = (0..n).map(|_| random_limits(&mut rng)).collect();
+        let target: Vec<f32> = limits.iter().map(|l| rng.uniform() * l.max_rate).collect();
+        let dt = range(&mut rng, 0.01, 0.1);
+        let next = DriveState::<N>::at_rest(n).toward(&limits, dt, &target);
+        let reached = next.reached_share(&target, 1.0);
+        let expected = next
+            .velocity()
+            .iter()
+            .zip(&target)
+            .filter(|(_, t)| **t != 0.0)
+            .map(|(v, t)| (v / t).abs())
+            .fold(0.0f32, f32::max)
+            .min(1.0);
+        assert_eq!(reached, expected);
+        assert!(reached <= 1.0);
+        assert_eq!(next.reached_share(&vec![0.0; n], 0.5), 0.5);
+        assert_eq!(next.reached_share(&vec![f32::NAN; n], 0.5), 0.5);
+        // A joint with no target does not count.
+        let mut some = target.clone();
+        some[0] = 0.0;
+        let others = next
+            .velocity()
+            .iter()
+            .zip(&some)
+            .filter(|(_, t)| **t != 0.0)
+            .map(|(v, t)| (v / t).abs())
+            .fold(None, |m: Option<f32>, r| Some(m.map_or(r, |m| m.max(r))));
+        assert_eq!(
+            next.reached_share(&some, 1.0),
+            others.map_or(1.0, |r| r.min(1.0))
+        );
+    }
+    // Settled on its target: the share it was aimed at.
+    let limits = [DriveLimits::from_rate(1.0)];
+    let mut state = DriveState::<N>::at_rest(1);
+    for _ in 0..200 {
+        state = state.toward(&limits, 0.05, &[0.5]);
+    }
+    assert_eq!(state.reached_share(&[1.0], 0.5), 0.5);
+    assert!(
+        DriveState::<N>::at_rest(1)
+            .toward(&limits, 0.05, &[1.0])
+            .reached_share(&[1.0], 1.0)
+            < 0.1
+    );
 }
