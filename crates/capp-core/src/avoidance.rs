@@ -379,19 +379,19 @@ fn half_space<const N: usize>(
     } else {
         PointKind::Link
     };
-    let (p, normal, depth) =
+    let (at, normal, depth) =
         surface_normal(frames, obstacles, settings, point, obstacle, Some(larger))?;
     Some(HalfSpace {
         link,
         normal: [normal.x, normal.y, normal.z],
-        offset: normal.dot(&p) - depth,
+        offset: normal.dot(&at.position) - depth,
         others_sq,
     })
 }
 
 /// At avoidance point `point` against `obstacle` inflated by the margin of
-/// `kind` (the point's own with `None`): the point's position, the unit
-/// normal `grad C / |grad C|` (eq. 25) and the lower bound `(C - 1) / |grad
+/// `kind` (the point's own with `None`): the point (its link and world
+/// position), the unit normal `grad C / |grad C|` (eq. 25) and the lower bound `(C - 1) / |grad
 /// C|` on its distance to that inflation (length units); `None` when the
 /// point is on or inside it, or out of its influence.
 // Not inlined: one copy of the pair code for its two callers.
@@ -403,7 +403,7 @@ pub fn surface_normal<const N: usize>(
     point: u16,
     obstacle: u8,
     kind: Option<PointKind>,
-) -> Option<(Vec3, Vec3, f32)> {
+) -> Option<(AvoidancePoint, Vec3, f32)> {
     let per = settings.points_per_link_total().max(1);
     let link = point as usize / per;
     let at = link_points(frames, settings, link).nth(point as usize - link * per)?;
@@ -414,9 +414,5 @@ pub fn surface_normal<const N: usize>(
     if !(contact.clearance > 0.0 && contact.clearance.is_finite() && slope > 0.0) {
         return None;
     }
-    Some((
-        at.position,
-        contact.gradient / slope,
-        contact.clearance / slope,
-    ))
+    Some((at, contact.gradient / slope, contact.clearance / slope))
 }

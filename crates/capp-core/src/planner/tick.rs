@@ -89,25 +89,24 @@ fn growth(m: f32) -> f32 {
 /// The arm's closest avoidance point and obstacle in `now` as an
 /// [`Approach`]: the point, its link, and the direction in which its `C`
 /// grows (eq. 25's gradient, normalised), to slide along when a candidate
-/// would creep onto that obstacle (`None`: the closest pair is two links,
-/// or none is within influence).
+/// would creep onto that obstacle (`None`: no obstacle within influence,
+/// or the point on or inside its inflation).
 fn closest_approach<const N: usize, const M: usize, const W: usize>(
     scenario: &Scenario<N, M, W>,
     now: &Evaluation<N>,
 ) -> Option<Approach> {
     let closest = now.field.clearance?;
-    let settings = &scenario.settings().avoidance;
-    let (point, normal, _) = surface_normal(
+    let (at, normal, _) = surface_normal(
         &now.frames,
         scenario.obstacles(),
-        settings,
+        &scenario.settings().avoidance,
         closest.point,
         closest.obstacle,
         None,
     )?;
     Some(Approach {
-        link: closest.point as usize / settings.points_per_link_total().max(1),
-        point,
+        link: at.link as usize,
+        point: at.position,
         normal,
     })
 }

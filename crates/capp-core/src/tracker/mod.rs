@@ -79,10 +79,10 @@ impl<const N: usize> DriveState<N> {
     /// How much of the velocity target `target` this state (a tick toward
     /// `share` of it) reached: `share`, or less where the limits held every
     /// joint below it (the largest `|v_j / target_j|` over the joints with a
-    /// target). From rest the jerk
-    /// limit holds the first tick to the same small motion whatever the
-    /// share above a few percent, so a refused tick's next try is cut from
-    /// the speed it reached, not from the one it was aimed at.
+    /// target). From rest the jerk limit holds the first tick to the same
+    /// small motion whatever the share above a few percent, so a refused
+    /// tick's next try is cut from the speed it reached, not from the one
+    /// it was aimed at.
     pub fn reached_share(&self, target: &[f32], share: f32) -> f32 {
         let mut reached: Option<f32> = None;
         for (&v, &t) in self.velocity().iter().zip(target) {
