@@ -153,9 +153,10 @@ fn a_snake_kept_off_itself_on_the_board_is_the_host_plan() {
     assert!(n > 1, "{n} setpoints");
 }
 
-/// Tracked motion on the board (issue 22, protocol 7): the snake of
+/// Tracked motion on the board (issue 22, protocols 7 and 8): the snake of
 /// `snake_fold.toml` in fixed ticks of 0.05 s, each joint within its rate,
-/// acceleration and jerk limits. Through `capp serial` the board's outputs
+/// acceleration and jerk limits, which are not the defaults (the host sends
+/// them). Through `capp serial` the board's outputs
 /// are `capp run`'s (positions bit for bit); in process, every setpoint's
 /// velocities and accelerations are the host planner's drive state after
 /// that tick (`Planner::drive`), bit for bit too, and the board reports how
@@ -172,6 +173,12 @@ fn a_tracked_plan_on_the_board_is_the_host_plan_with_its_drive_state() {
     let problem = Problem::load(&path).unwrap();
     assert_eq!(problem.settings.motion, Motion::Tracked);
     let scenario = problem.validate().unwrap();
+    // Limits of the file's own, which the board can only have from the host:
+    // a board on the defaults plans another trajectory.
+    assert!(!problem.default_drive_limits());
+    let first = scenario.drive_limits()[0];
+    let default = capp_core::tracker::limits::DriveLimits::from_rate(first.max_rate);
+    assert!(first.max_accel < 0.7 * default.max_accel, "{first:?}");
     // The host: capp run's planner (`capp_sim::plan::run`), every tick's
     // drive state kept, positions and plan time with it.
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();

@@ -342,8 +342,9 @@ impl Problem {
 
     /// Whether every joint's acceleration and jerk limits are the defaults
     /// from its rate (capp-core's `DriveLimits::from_rate`, to a part in a
-    /// million: the file's are computed in f64), the only ones the board
-    /// knows (the protocol does not carry others yet).
+    /// million: the file's are computed in f64): the scenario keeps
+    /// `from_rate`'s, and `capp serial` sends no drive limits (the board
+    /// takes the same defaults).
     pub fn default_drive_limits(&self) -> bool {
         let near = |a: f64, b: f32| (a - b as f64).abs() <= 1e-6 * (b as f64).abs();
         self.joints.iter().zip(&self.drive.joints).all(|(j, d)| {

@@ -176,10 +176,6 @@ pub enum SerialError {
     },
     /// The plan was stopped (by another host) before it ended.
     Stopped,
-    /// Tracked motion with acceleration or jerk limits of its own, which
-    /// the protocol does not carry yet (the board would plan with the
-    /// defaults from the rates).
-    DriveLimits,
 }
 
 impl fmt::Display for SerialError {
@@ -191,11 +187,6 @@ impl fmt::Display for SerialError {
                 "the board speaks protocol version {board}, this host {host}: flash matching firmware"
             ),
             SerialError::Stopped => write!(f, "the plan was stopped before it ended"),
-            SerialError::DriveLimits => write!(
-                f,
-                "tracked motion with max_accel or max_jerk of its own: the board knows only the defaults from the rates (protocol {})",
-                capp_proto::VERSION
-            ),
         }
     }
 }
@@ -219,9 +210,6 @@ pub fn plan_on_board<T: Read + Write>(
     idle: Duration,
     watch: impl FnMut(&Status),
 ) -> Result<(RunResult, LinkReport), SerialError> {
-    if problem.settings.motion == capp_core::Motion::Tracked && !problem.default_drive_limits() {
-        return Err(SerialError::DriveLimits);
-    }
     let protocol = link.ping(0x0CA9_9000)?;
     if protocol != capp_proto::VERSION {
         return Err(SerialError::Version {
@@ -233,6 +221,13 @@ pub fn plan_on_board<T: Read + Write>(
         joints: &problem.joints,
         capsule_radius: scenario.capsules().radii(),
         capsule_rows: scenario.capsules().checked_rows(),
+        // The defaults from the rates need no frames; other limits are
+        // the host's to the bit.
+        drive: if problem.default_drive_limits() {
+            &[]
+        } else {
+            scenario.drive_limits()
+        },
         obstacles: &problem.obstacles,
         waypoints: &problem.waypoints,
         joint_goals: &problem.joint_goals,

@@ -98,6 +98,11 @@ pub struct Upload<'a> {
     /// The checked pairs, one row per link as the radii
     /// (`Scenario::capsules().checked_rows()`).
     pub capsule_rows: &'a [u64],
+    /// Each joint's drive limits, or none: the defaults from the rates
+    /// (the host's `Scenario::drive_limits()`, so a tracked plan on the
+    /// board keeps the host's limits to the bit; each joint's `max_rate` is
+    /// its own and is not sent again).
+    pub drive: &'a [capp_core::tracker::limits::DriveLimits],
     /// The obstacles.
     pub obstacles: &'a [capp_core::SuperEllipsoid],
     /// The waypoints (the last is the target).
@@ -326,6 +331,9 @@ impl<T: Read + Write> Link<T> {
         if upload.capsule_radius.len() > capp_proto::MAX_JOINTS {
             return Err(LinkError::TooLarge("capsules"));
         }
+        if upload.drive.len() > capp_proto::MAX_JOINTS {
+            return Err(LinkError::TooLarge("drive limits"));
+        }
         if upload.obstacles.len() > capp_proto::MAX_OBSTACLES {
             return Err(LinkError::TooLarge("obstacles"));
         }
@@ -348,6 +356,15 @@ impl<T: Read + Write> Link<T> {
             self.expect_ack(&Command::Capsule {
                 index: i as u8,
                 capsule: capp_proto::Capsule { radius, checked },
+            })?;
+        }
+        for (i, d) in upload.drive.iter().enumerate() {
+            self.expect_ack(&Command::Drive {
+                index: i as u8,
+                drive: capp_proto::Drive {
+                    max_accel: d.max_accel,
+                    max_jerk: d.max_jerk,
+                },
             })?;
         }
         for (i, o) in upload.obstacles.iter().enumerate() {

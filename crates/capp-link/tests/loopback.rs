@@ -109,6 +109,7 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
         joints: &joints,
         capsule_radius: &[],
         capsule_rows: &[],
+        drive: &[],
         obstacles: &[],
         waypoints: &waypoints,
         joint_goals: &[],

@@ -119,6 +119,10 @@ struct Draft {
     /// checked-pair rows, as `Scenario::set_link_capsules` takes them.
     capsule_radius: Vec<f32, N>,
     capsule_rows: Vec<u64, N>,
+    /// Drive limits, one per joint or none (the defaults from the rates):
+    /// accelerations and jerks, as `Scenario::set_drive_limits` takes them.
+    drive_accel: Vec<f32, N>,
+    drive_jerk: Vec<f32, N>,
 }
 
 impl Draft {
@@ -132,6 +136,8 @@ impl Draft {
             start: Vec::new(),
             capsule_radius: Vec::new(),
             capsule_rows: Vec::new(),
+            drive_accel: Vec::new(),
+            drive_jerk: Vec::new(),
         }
     }
 
@@ -146,6 +152,8 @@ impl Draft {
             start,
             capsule_radius,
             capsule_rows,
+            drive_accel,
+            drive_jerk,
         } = self;
         joints.clear();
         obstacles.clear();
@@ -155,12 +163,20 @@ impl Draft {
         start.clear();
         capsule_radius.clear();
         capsule_rows.clear();
+        drive_accel.clear();
+        drive_jerk.clear();
     }
 
     /// No capsules: self-collision off.
     fn clear_capsules(&mut self) {
         self.capsule_radius.clear();
         self.capsule_rows.clear();
+    }
+
+    /// No drive limits: the defaults from the rates.
+    fn clear_drives(&mut self) {
+        self.drive_accel.clear();
+        self.drive_jerk.clear();
     }
 }
 
@@ -489,6 +505,7 @@ impl<const TXQ: usize> Node<TXQ> {
                     d.joints.clear();
                     d.start.clear();
                     d.clear_capsules();
+                    d.clear_drives();
                 }
                 Part::Obstacles => d.obstacles.clear(),
                 Part::Waypoints => {
@@ -496,13 +513,15 @@ impl<const TXQ: usize> Node<TXQ> {
                     d.joint_goals.clear();
                 }
                 Part::Capsules => d.clear_capsules(),
+                Part::Drives => d.clear_drives(),
             },
             Command::Preset(Preset::Pips) => {
                 let joints = capp_core::pips::joints();
                 d.joints.clear();
                 d.start.clear();
-                // The old robot's capsules do not fit the preset.
+                // The old robot's capsules and drives do not fit the preset.
                 d.clear_capsules();
+                d.clear_drives();
                 for (j, q) in joints.iter().zip(capp_core::pips::home()) {
                     let _ = d.joints.push(*j);
                     let _ = d.start.push(q);
@@ -550,6 +569,12 @@ impl<const TXQ: usize> Node<TXQ> {
                 append(&mut d.capsule_radius, *index, capsule.radius, finite)?;
                 // The same length as the radii: it cannot be full.
                 let _ = d.capsule_rows.push(capsule.checked);
+            }
+            Command::Drive { index, drive } => {
+                let finite = drive.max_accel.is_finite() && drive.max_jerk.is_finite();
+                append(&mut d.drive_accel, *index, drive.max_accel, finite)?;
+                // The same length as the accelerations: it cannot be full.
+                let _ = d.drive_jerk.push(drive.max_jerk);
             }
             Command::Settings(s) => {
                 let s = capp_core::Settings::from(*s);
@@ -620,6 +645,13 @@ impl<const TXQ: usize> Node<TXQ> {
         if !d.capsule_radius.is_empty() {
             plan.scenario
                 .set_link_capsules(&d.capsule_radius, &d.capsule_rows)
+                .map_err(scenario_refusal)?;
+        }
+        // Bit for bit the host's drive limits (`Scenario::drive_limits`
+        // there); none sent, the defaults from the rates.
+        if !d.drive_accel.is_empty() {
+            plan.scenario
+                .set_drive_limits(&d.drive_accel, &d.drive_jerk)
                 .map_err(scenario_refusal)?;
         }
         plan.planner
@@ -898,10 +930,8 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
             };
             (ErrorCode::InvalidCapsules, index)
         }
-        // The board keeps the drive limits that follow from the rates (the
-        // protocol does not carry others yet), so these cannot arise here.
-        ScenarioError::Drive { joint, .. } => (ErrorCode::InvalidRobot, joint),
-        ScenarioError::DriveLength => (ErrorCode::InvalidRobot, NO_INDEX),
+        ScenarioError::Drive { joint, .. } => (ErrorCode::InvalidDrive, joint),
+        ScenarioError::DriveLength => (ErrorCode::InvalidDrive, NO_INDEX),
     }
 }
 

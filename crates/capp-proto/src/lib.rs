@@ -37,7 +37,7 @@ pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 7;
+pub const VERSION: u8 = 8;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -183,8 +183,9 @@ pub struct Settings {
     /// Tracked motion: a fixed control period (`time_step_s`), each joint
     /// within its rate, acceleration and jerk limits, every tick's stop
     /// cleared (capp-core's `Motion::Tracked`; `false`: `Motion::Stepped`;
-    /// since version 7). The board's acceleration and jerk limits are the
-    /// defaults from the rates (capp-core's `DriveLimits::from_rate`).
+    /// since version 7). Each joint's acceleration and jerk limits are the
+    /// load's [`Command::Drive`]s, or without them the defaults from the
+    /// rates (capp-core's `DriveLimits::from_rate`).
     pub tracked: bool,
 }
 
@@ -221,6 +222,19 @@ pub struct Capsule {
     pub checked: u64,
 }
 
+/// One joint's drive limits beyond its rate (capp-core's
+/// `tracker::limits::DriveLimits` without `max_rate`, which is the joint's;
+/// since version 8). Units are the joint's: radians (revolute) or length
+/// units (prismatic), per second squared and per second cubed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Drive {
+    /// Largest `|acceleration|`, per second squared (positive and finite).
+    pub max_accel: f32,
+    /// Largest `|jerk|`, per second cubed (positive and finite).
+    pub max_jerk: f32,
+}
+
 /// Which part of the load [`Command::Clear`] empties.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -237,6 +251,9 @@ pub enum Part {
     /// The link capsules: self-collision off until capsules are sent again
     /// (since version 6).
     Capsules,
+    /// The joints' drive limits: the defaults from the rates until drive
+    /// limits are sent again (since version 8).
+    Drives,
 }
 
 /// Host to board. Each is answered by exactly one reply: [`Reply::Pong`] for
@@ -310,6 +327,17 @@ pub enum Command {
         /// Its radius and checked pairs.
         capsule: Capsule,
     },
+    /// 13: append joint `index`'s acceleration and jerk limits; `index`
+    /// must equal the number of drive limits loaded (since version 8). A
+    /// load with drive limits has one per joint and a tracked plan keeps
+    /// every joint within them; a load without any takes the defaults from
+    /// the rates (full rate from rest in 0.5 s, full acceleration in 0.1 s).
+    Drive {
+        /// The joint (0-based).
+        index: u8,
+        /// Its limits.
+        drive: Drive,
+    },
 }
 
 impl Command {
@@ -329,6 +357,7 @@ impl Command {
             Command::Status => 10,
             Command::JointWaypoint { .. } => 11,
             Command::Capsule { .. } => 12,
+            Command::Drive { .. } => 13,
         }
     }
 }
@@ -369,6 +398,10 @@ pub enum ErrorCode {
     /// `NO_INDEX` when their number is not the number of joints; since
     /// version 6).
     InvalidCapsules,
+    /// 15: the drive limits failed validation (`index` = the joint whose
+    /// acceleration or jerk limit is not positive, or `NO_INDEX` when their
+    /// number is not the number of joints; since version 8).
+    InvalidDrive,
 }
 
 /// Where the board is.

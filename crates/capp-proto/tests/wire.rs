@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 07 00 01, CRC-32 0x8d09ff01 (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 08 00 01, CRC-32 0x8655b83c (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x07, 0x06, 0x01, 0x01, 0xff, 0x09, 0x8d, 0x00]
+        &[0x02, 0x08, 0x06, 0x01, 0x3c, 0xb8, 0x55, 0x86, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x07, 0x01, 0x08, 0xe4, 0x76, 0xce, 0xed, 0x00]
+        &[0x08, 0x08, 0x01, 0x08, 0xd9, 0x31, 0x92, 0xe6, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x07, 0x02, 0xff, 0x01, 0xff, 0xa7, 0x09, 0x8a, 0x54, 0x00]
+        &[0x0a, 0x08, 0x02, 0xff, 0x01, 0xff, 0x76, 0x9e, 0xda, 0xd6, 0x00]
     );
 }
 
@@ -73,6 +73,7 @@ fn every_command_is_pinned() {
     check(&Command::Clear(Part::Obstacles), &[0x01, 0x02]);
     check(&Command::Clear(Part::Waypoints), &[0x01, 0x03]);
     check(&Command::Clear(Part::Capsules), &[0x01, 0x04]);
+    check(&Command::Clear(Part::Drives), &[0x01, 0x05]);
     check(&Command::Preset(Preset::Pips), &[0x02, 0x00]);
     let joint = Joint {
         kind: JointKind::Prismatic,
@@ -283,6 +284,17 @@ fn every_command_is_pinned() {
         },
         &[0x0C, 0x1F, 0x00, 0x00, 0xC0, 0x3F, 0x00],
     );
+    // Joint 3's drive: 0.5 per second squared, 2.0 per second cubed.
+    check(
+        &Command::Drive {
+            index: 3,
+            drive: Drive {
+                max_accel: 0.5,
+                max_jerk: 2.0,
+            },
+        },
+        &cat(&[&[0x0D, 0x03], &HALF, &[0x00, 0x00, 0x00, 0x40]]),
+    );
 }
 
 /// capp-core's defaults, through the `core` conversion: the same bytes as above.
@@ -301,7 +313,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x07, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x08, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -320,6 +332,7 @@ fn every_reply_is_pinned() {
         ErrorCode::Busy,
         ErrorCode::NotRunning,
         ErrorCode::InvalidCapsules,
+        ErrorCode::InvalidDrive,
     ]
     .into_iter()
     .enumerate()
@@ -614,6 +627,15 @@ fn sample_commands() -> Vec<Command> {
             capsule: Capsule {
                 radius: 1.5,
                 checked: !((2u64 << i) - 1) & ((1 << 18) - 1),
+            },
+        });
+    }
+    for i in 0..18u8 {
+        v.push(Command::Drive {
+            index: i,
+            drive: Drive {
+                max_accel: 0.4 + i as f32,
+                max_jerk: 4.0 * (i as f32 + 1.0),
             },
         });
     }

@@ -2,15 +2,16 @@
 //! accelerations beside their positions, bit for bit the host planner's
 //! (`Planner::drive`: the tracker's state; stepped, the step's rate and its
 //! change over the step), and the
-//! tracked ticks whose work overran the control period, counted.
+//! tracked ticks whose work overran the control period, counted. The drive
+//! limits a load carries (protocol 8's `Drive`), checked and planned with.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use std::vec::Vec;
 
 use capp_core::{pips, Mission, Motion, Phase, Planner, Robot, Scenario};
-use capp_proto::{Command, Reply, State};
+use capp_proto::{Command, ErrorCode, Part, Preset, Reply, State, NO_INDEX};
 
-use super::{load_commands_with, replies, target, FakeUart};
+use super::{exchange, load_commands_with, outcomes, replies, target, FakeUart};
 use crate::Node;
 
 /// One joint vector, as bits.
@@ -28,12 +29,20 @@ fn tracked() -> capp_core::Settings {
     }
 }
 
-/// The host's plan with `settings`, every step, as the board should stream
-/// it: the start, then the state after every step.
-fn host_rows(settings: capp_core::Settings) -> Vec<Row> {
+/// Each joint's acceleration and jerk limits, or none: the defaults.
+type Drives<'a> = &'a [(f32, f32)];
+
+/// The host's plan with `settings` and the drive limits `drive`, every
+/// step, as the board should stream it: the start, then the state after
+/// every step.
+fn host_rows(settings: capp_core::Settings, drive: Drives) -> Vec<Row> {
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(&[target()], settings).unwrap();
-    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    if !drive.is_empty() {
+        let (accel, jerk): (Vec<f32>, Vec<f32>) = drive.iter().copied().unzip();
+        scenario.set_drive_limits(&accel, &jerk).unwrap();
+    }
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let row = |p: &Planner<32>, time_s: f32| -> Row {
         if settings.motion == Motion::Stepped {
@@ -64,11 +73,27 @@ fn host_rows(settings: capp_core::Settings) -> Vec<Row> {
     }
 }
 
-/// Plans with `settings` on a node (cycle counter `counter` at `hz`, if
-/// any), every step streamed over a UART that keeps up; the setpoints and
-/// the final status.
+/// The `Drive` commands of `drive`, joint by joint.
+fn drive_commands(drive: Drives) -> Vec<Command> {
+    drive
+        .iter()
+        .enumerate()
+        .map(|(i, &(max_accel, max_jerk))| Command::Drive {
+            index: i as u8,
+            drive: capp_proto::Drive {
+                max_accel,
+                max_jerk,
+            },
+        })
+        .collect()
+}
+
+/// Plans with `settings` and the drive limits `drive` on a node (cycle
+/// counter `counter` at `hz`, if any), every step streamed over a UART that
+/// keeps up; the setpoints and the final status.
 fn board_rows(
     settings: capp_core::Settings,
+    drive: Drives,
     counter: Option<(fn() -> u32, u32)>,
 ) -> (Vec<Row>, capp_proto::Status) {
     let mut node = Node::<2048>::new();
@@ -76,7 +101,10 @@ fn board_rows(
         node.set_cycle_counter(counter, hz);
     }
     let mut uart = FakeUart::new(usize::MAX);
-    for c in load_commands_with(settings) {
+    for c in load_commands_with(settings)
+        .into_iter()
+        .chain(drive_commands(drive))
+    {
         uart.send(&c);
     }
     uart.send(&Command::Run {
@@ -119,8 +147,8 @@ fn board_rows(
 
 #[test]
 fn a_tracked_plan_streams_the_drive_state_bit_for_bit() {
-    let expected = host_rows(tracked());
-    let (rows, status) = board_rows(tracked(), None);
+    let expected = host_rows(tracked(), &[]);
+    let (rows, status) = board_rows(tracked(), &[], None);
     assert_eq!(
         (status.state, status.outcome),
         (State::Done, Some(capp_proto::Outcome::Reached))
@@ -140,8 +168,8 @@ fn a_tracked_plan_streams_the_drive_state_bit_for_bit() {
 #[test]
 fn a_stepped_plan_streams_its_rates_and_their_change() {
     let settings = capp_core::Settings::default();
-    let expected = host_rows(settings);
-    let (rows, _) = board_rows(settings, None);
+    let expected = host_rows(settings, &[]);
+    let (rows, _) = board_rows(settings, &[], None);
     assert_eq!(rows, expected);
     assert!(rows.iter().skip(1).any(|r| r.1.iter().any(|&v| v != 0)));
     assert!(rows.iter().skip(1).any(|r| r.2.iter().any(|&a| a != 0)));
@@ -165,20 +193,187 @@ counter!(slow_stepped, 60);
 #[test]
 fn tracked_ticks_longer_than_the_control_period_are_counted() {
     // A 1 kHz "core clock": the default 0.05 s period is 50 cycles.
-    let (rows, status) = board_rows(tracked(), Some((slow, 1000)));
+    let (rows, status) = board_rows(tracked(), &[], Some((slow, 1000)));
     let steps = (rows.len() - 1) as u32;
     assert_eq!(status.step, steps);
     assert_eq!(status.step_cycles_max, 60);
     assert_eq!(status.period_overruns, steps, "every tick overran");
     // The same plan, bit for bit: timing changes nothing but the count.
-    assert_eq!(rows, host_rows(tracked()));
+    assert_eq!(rows, host_rows(tracked(), &[]));
 
-    let (_, status) = board_rows(tracked(), Some((fast, 1000)));
+    let (_, status) = board_rows(tracked(), &[], Some((fast, 1000)));
     assert_eq!(status.step_cycles_max, 40);
     assert_eq!(status.period_overruns, 0, "every tick within its period");
 
     // A stepped plan has no period to overrun.
-    let (_, status) = board_rows(capp_core::Settings::default(), Some((slow_stepped, 1000)));
+    let (_, status) = board_rows(
+        capp_core::Settings::default(),
+        &[],
+        Some((slow_stepped, 1000)),
+    );
     assert_eq!(status.step_cycles_max, 60);
     assert_eq!(status.period_overruns, 0);
+}
+
+/// PIPS's drive limits for the tests below: not the defaults (full rate
+/// from rest in 0.5 s, full acceleration in 0.1 s) but a ramp of 0.3 to
+/// 0.8 s and a jerk time of 0.05 to 0.2 s, differing joint by joint.
+fn own_drives() -> Vec<(f32, f32)> {
+    pips::joints()
+        .iter()
+        .enumerate()
+        .map(|(j, joint)| {
+            let accel = joint.max_rate / (0.3 + 0.5 * (j % 3) as f32 / 2.0);
+            (accel, accel / (0.05 + 0.15 * (j % 4) as f32 / 3.0))
+        })
+        .collect()
+}
+
+#[test]
+fn drive_limits_reach_the_boards_scenario_bit_for_bit() {
+    let drive = own_drives();
+    let expected = host_rows(tracked(), &drive);
+    // Another plan than with the defaults: the board must use what came.
+    assert_ne!(expected, host_rows(tracked(), &[]));
+    let (rows, status) = board_rows(tracked(), &drive, None);
+    assert_eq!(status.state, State::Done);
+    assert_eq!(rows.len(), expected.len());
+    for (i, (r, e)) in rows.iter().zip(&expected).enumerate() {
+        assert_eq!(r, e, "setpoint {i}");
+    }
+    // Each joint within its own limits, read back from the streamed
+    // velocities: the acceleration limit bounds their change per tick.
+    let dt = tracked().time_step_s;
+    for pair in rows.windows(2) {
+        for (j, (&v0, &v1)) in pair[0].1.iter().zip(&pair[1].1).enumerate() {
+            let change = (f32::from_bits(v1) - f32::from_bits(v0)).abs() / dt;
+            assert!(change <= drive[j].0 * (1.0 + 1e-4), "joint {j}: {change}");
+        }
+    }
+
+    // The node's scenario holds them; Clear(Drives), a new robot or the
+    // preset bring back the defaults.
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    let run = Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    let defaults = |node: &Node<2048>| {
+        node.plan
+            .scenario
+            .drive_limits()
+            .iter()
+            .all(|l| *l == capp_core::tracker::limits::DriveLimits::from_rate(l.max_rate))
+    };
+    for clear in [
+        Command::Clear(Part::Drives),
+        Command::Clear(Part::All),
+        Command::Preset(Preset::Pips),
+    ] {
+        for c in load_commands_with(tracked())
+            .into_iter()
+            .chain(drive_commands(&drive))
+        {
+            uart.send(&c);
+        }
+        uart.send(&run);
+        exchange(&mut node, &mut uart);
+        let limits = node.plan.scenario.drive_limits();
+        assert_eq!(limits.len(), drive.len());
+        for (l, &(a, j)) in limits.iter().zip(&drive) {
+            assert_eq!(
+                (l.max_accel.to_bits(), l.max_jerk.to_bits()),
+                (a.to_bits(), j.to_bits())
+            );
+        }
+        uart.send(&Command::Stop);
+        uart.send(&clear);
+        if clear == Command::Clear(Part::All) {
+            for c in load_commands_with(tracked()) {
+                uart.send(&c);
+            }
+        }
+        uart.send(&run);
+        exchange(&mut node, &mut uart);
+        assert_eq!(node.status().state, State::Running, "after {clear:?}");
+        assert!(defaults(&node), "after {clear:?}");
+        uart.send(&Command::Stop);
+        exchange(&mut node, &mut uart);
+    }
+}
+
+#[test]
+fn bad_drive_limits_are_refused_with_the_joint() {
+    let drive = own_drives();
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    for c in load_commands_with(tracked()) {
+        uart.send(&c);
+    }
+    exchange(&mut node, &mut uart);
+    let one = |index: u8, max_accel: f32, max_jerk: f32| Command::Drive {
+        index,
+        drive: capp_proto::Drive {
+            max_accel,
+            max_jerk,
+        },
+    };
+    // On arrival: a limit that is not a number or infinite, out of order.
+    uart.send(&one(0, f32::NAN, 1.0));
+    uart.send(&one(0, 1.0, f32::INFINITY));
+    uart.send(&one(1, 1.0, 1.0));
+    assert_eq!(
+        outcomes(&exchange(&mut node, &mut uart)),
+        [
+            (13, ErrorCode::NotFinite, 0),
+            (13, ErrorCode::NotFinite, 0),
+            (13, ErrorCode::OutOfOrder, 1)
+        ]
+    );
+    let run = Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    // At `Run`: joint 4's acceleration or jerk limit zero or negative.
+    for (accel, jerk) in [(0.0, 1.0), (-1.0, 1.0), (1.0, 0.0), (1.0, -0.5)] {
+        uart.send(&Command::Clear(Part::Drives));
+        let mut commands = drive_commands(&drive);
+        commands[4] = one(4, accel, jerk);
+        for c in &commands {
+            uart.send(c);
+        }
+        uart.send(&run);
+        let got = outcomes(&exchange(&mut node, &mut uart));
+        assert_eq!(
+            got.last(),
+            Some(&(8, ErrorCode::InvalidDrive, 4)),
+            "{accel} {jerk}"
+        );
+        assert_ne!(node.status().state, State::Running);
+    }
+    // Not one per joint.
+    uart.send(&Command::Clear(Part::Drives));
+    for c in drive_commands(&drive[..17]) {
+        uart.send(&c);
+    }
+    uart.send(&run);
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(8, ErrorCode::InvalidDrive, NO_INDEX)));
+    // A 33rd does not fit.
+    uart.send(&Command::Clear(Part::Drives));
+    for i in 0..33u8 {
+        uart.send(&one(i, 1.0, 1.0));
+    }
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(13, ErrorCode::Capacity, 32)));
+    // And the good ones run.
+    uart.send(&Command::Clear(Part::Drives));
+    for c in drive_commands(&drive) {
+        uart.send(&c);
+    }
+    uart.send(&run);
+    let got = outcomes(&exchange(&mut node, &mut uart));
+    assert_eq!(got.last(), Some(&(8, ErrorCode::Framing, 0xAA)));
+    assert_eq!(node.status().state, State::Running);
 }
