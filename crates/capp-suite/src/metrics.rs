@@ -14,7 +14,12 @@
 //! the same path driven at the joints' rate limits, `sum_k max_j |dq_j| /
 //! max_rate_j`; `straight_time` the straight joint-space line from the start
 //! to the final configuration at the rate limits, `max_j |q_end_j -
-//! q_start_j| / max_rate_j`.
+//! q_start_j| / max_rate_j`; `rest_to_rest_time` the least time any motion
+//! a drive can follow takes from the start to the final configuration, each
+//! joint alone from rest to rest at its rate, acceleration and jerk limits
+//! ([`capp_sim::drive_check::rest_to_rest`]): a floor no plan between the
+//! same configurations can beat, which a plan with unlimited acceleration
+//! (the stepped one) may.
 //!
 //! Drive figures (issue 22) are `capp check`'s
 //! ([`capp_sim::drive_check`]): from the positions alone, rows off the fixed
@@ -165,6 +170,9 @@ pub struct RunMetrics {
     pub same_path_time: f64,
     /// The straight joint-space line start -> final configuration at the rate limits, seconds.
     pub straight_time: f64,
+    /// The least time from the start to the final configuration within the
+    /// drive limits, each joint from rest to rest, seconds.
+    pub rest_to_rest_time: f64,
     /// Steps after the last row outside 10x the tolerances (reached runs).
     pub steps_10x: Option<u32>,
     /// Position error at the start (the planner's, row 0).
@@ -313,6 +321,13 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         _ => 0.0,
     };
 
+    let rest_to_rest_time = match (rows.first(), rows.last()) {
+        (Some(a), Some(b)) => {
+            capp_sim::drive_check::rest_to_rest::floor_s(a, b, &problem.drive.joints)
+        }
+        _ => 0.0,
+    };
+
     let steps = result.steps();
     let steps_10x = (result.outcome == Outcome::Reached).then(|| {
         let s = &problem.settings;
@@ -337,6 +352,7 @@ pub fn measure(problem: &Problem, result: &RunResult) -> RunMetrics {
         motion_time,
         same_path_time,
         straight_time,
+        rest_to_rest_time,
         steps_10x,
         initial_position_error: result
             .rows

@@ -295,8 +295,9 @@ impl Tally<'_> {
         };
         let accel = peaks(&|m| m.drive.peak_accel);
         let jerk = peaks(&|m| m.drive.peak_jerk);
+        let floor = self.reached_values(|_, m| ratio(m.motion_time, m.rest_to_rest_time));
         format!(
-            "| {lead} | {runs} | {} | {} | {} / {} / {} | {moving} of {reached} ({}) | {} | {} / {} | {} / {} |",
+            "| {lead} | {runs} | {} | {} | {} / {} / {} | {moving} of {reached} ({}) | {} | {} / {} | {} / {} | {} |",
             share(&|m| m.drive.off_period > 0),
             share(&|m| m.drive.over_limit()),
             share(&|m| m.drive.over_rate > 0),
@@ -308,12 +309,13 @@ impl Tally<'_> {
             opt(accel.iter().copied().reduce(f64::max), 1),
             opt(median(&jerk), 1),
             opt(jerk.iter().copied().reduce(f64::max), 1),
+            opt(median(&floor), 2),
         )
     }
 }
 
-const DRIVE_HEAD: &str = "| runs | any row off the period | any row over a limit | over rate / acceleration / jerk | reached, arriving moving | any braking stop colliding | peak acceleration / limit, median / max | peak jerk / limit, median / max |";
-const DRIVE_RULE: &str = "|---|---|---|---|---|---|---|---|";
+const DRIVE_HEAD: &str = "| runs | any row off the period | any row over a limit | over rate / acceleration / jerk | reached, arriving moving | any braking stop colliding | peak acceleration / limit, median / max | peak jerk / limit, median / max | motion time / rest-to-rest floor, reached, median |";
+const DRIVE_RULE: &str = "|---|---|---|---|---|---|---|---|---|";
 
 const ESCAPE_HEAD: &str = "| runs | escaped (any attempt) | escaped and reached | attempts of those, median / max | their motion time, median (s) | RRT shortcut path on the same cases, median (s) | motion / RRT: ratio of the medians | motion / RRT: median of the ratios | ended by the return (attempts spent) | detours: sides taken | walks: sides taken | searched paths: sides taken |";
 const ESCAPE_RULE: &str = "|---|---|---|---|---|---|---|---|---|---|---|---|";
@@ -468,8 +470,13 @@ pub fn markdown_with_figures(
          beyond `f32` rounding; *arriving moving*, a reached run whose last row has a joint above \
          1 % of its rate; *braking stop colliding*, a run with a row from which each joint braking \
          to rest at its limits would hit an obstacle or another link (every tick and densely \
-         between). Shares of runs; the peaks are the largest ratio per run. Not yet enforced: the \
-         planner does not track these limits (issue 22 in progress), so these are today's figures.\n\n",
+         between). Shares of runs; the peaks are the largest ratio per run. *Rest-to-rest floor*: \
+         the least time any motion within the limits takes from the run's start to its final \
+         configuration, each joint alone from rest to rest (`capp_sim::drive_check::rest_to_rest`); \
+         no plan between the same configurations can beat it, so a stepped plan's ratio below 1 is \
+         time no drive could follow, and `1 / ratio` is the least slowdown any drive-followable \
+         plan of the same move must take against it. The stepped variants do not track these \
+         limits (`motion = \"tracked\"` does, issue 22).\n\n",
     );
     let _ = writeln!(s, "| family | variant {DRIVE_HEAD}");
     let _ = writeln!(s, "|---|---{DRIVE_RULE}");
@@ -800,7 +807,7 @@ fn escape_sides(e: &crate::metrics::EscapeCounts) -> String {
 /// The per-case, per-variant CSV.
 pub fn csv(results: &[CaseResult]) -> String {
     let mut s = String::from(
-        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,self_collisions,closest_link_gap,not_finite,joint_limit,rate_limit,other,drive_off_period_rows,drive_over_rate_rows,drive_over_accel_rows,drive_over_jerk_rows,drive_arrives_moving,drive_braking_collisions,drive_peak_accel_ratio,drive_peak_jerk_ratio,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
+        "family,case,tags,variant,outcome,reaches,steps,motion_time_s,same_path_time_s,straight_time_s,steps_10x,final_position_error,final_orientation_error,closest,collisions,collisions_between,contacts,self_collisions,closest_link_gap,not_finite,joint_limit,rate_limit,other,drive_off_period_rows,drive_over_rate_rows,drive_over_accel_rows,drive_over_jerk_rows,drive_arrives_moving,drive_braking_collisions,drive_peak_accel_ratio,drive_peak_jerk_ratio,drive_rest_to_rest_s,escape_attempts,escape_walks,escape_detours,escape_searches,escape_paths,escape_returned,escape_first_step,escape_sides,trajectory_bits,wall_ms,rrt_solved,rrt_ms,rrt_iterations,rrt_nodes,rrt_raw_time_s,rrt_path_time_s,error\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v}"));
     // A refused file: every measurement column empty (all but the case's 4,
@@ -829,7 +836,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                 Ok(m) => {
                     let _ = writeln!(
                         s,
-                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
+                        "{lead},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\",{:016x},{:.3},{tail},",
                         capp_sim::output::summary::outcome_name(m.outcome),
                         m.reaches,
                         m.steps,
@@ -857,6 +864,7 @@ pub fn csv(results: &[CaseResult]) -> String {
                         m.drive.braking_collisions,
                         o(m.drive.peak_accel),
                         o(m.drive.peak_jerk),
+                        m.rest_to_rest_time,
                         m.escape.attempts(),
                         m.escape.walks,
                         m.escape.detours,

@@ -62,6 +62,7 @@
 //! will keep them, and then the switch is turned on.
 
 pub mod braking;
+pub mod rest_to_rest;
 
 use std::fmt;
 
