@@ -80,6 +80,9 @@ pub struct Planner<const N: usize> {
     /// moves toward: the last taken share grown by its margin, or after a
     /// brake the last share tried, grown ([`Motion::Tracked`]).
     share: f32,
+    /// How a tracked run that ended short of its target ends once the arm
+    /// is at rest: until then every tick brakes ([`Motion::Tracked`]).
+    ending: Option<Outcome>,
 }
 
 impl<const N: usize> Planner<N> {
@@ -114,6 +117,7 @@ impl<const N: usize> Planner<N> {
             drive: DriveState::at_rest(0),
             velocity_target: [0.0; N],
             share: 1.0,
+            ending: None,
         };
         planner.reset(&[]);
         planner
@@ -197,6 +201,9 @@ impl<const N: usize> Planner<N> {
             self.last = self.report(0.0, false, 0);
             return Ok(self.last);
         };
+        if let Some(outcome) = self.ending {
+            return Ok(self.ending_step(scenario, &target, outcome));
+        }
         if self.escape.is_searching() {
             return Ok(self.search_step(scenario, &target));
         }
@@ -379,7 +386,7 @@ impl<const N: usize> Planner<N> {
                 .escape
                 .after_step(scenario, &self.q[..n], &self.evals.now().frames);
             if leg == Leg::Returned {
-                self.phase = Phase::Done(Outcome::Stalled);
+                self.end(scenario, Outcome::Stalled);
             }
             if leg != Leg::Going {
                 // Back to the target: its error, and a fresh stall window.
@@ -409,6 +416,52 @@ impl<const N: usize> Planner<N> {
         }
     }
 
+    /// Ends the run with `outcome`; a tracked arm still moving brakes to
+    /// rest first, in real time ([`Planner::ending_step`]).
+    fn end<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        outcome: Outcome,
+    ) {
+        let tracked = scenario.settings().motion == Motion::Tracked;
+        if !tracked || self.drive.is_at_rest(scenario.drive_limits(), 0.0) {
+            self.phase = Phase::Done(outcome);
+        } else {
+            self.ending = Some(outcome);
+        }
+    }
+
+    /// A tick of a tracked run that has ended short of `target`: the stop
+    /// the last taken tick cleared; at rest the run is over with `outcome`
+    /// (or reached, should the arm have stopped within tolerance).
+    // Not inlined: cold, and out of the step's hot loops.
+    #[inline(never)]
+    fn ending_step<const M: usize, const W: usize>(
+        &mut self,
+        scenario: &Scenario<N, M, W>,
+        target: &Target,
+        outcome: Outcome,
+    ) -> StepReport {
+        self.brake(scenario, target);
+        self.step += 1;
+        let n = self.n.min(N);
+        for (r, &v) in self.rate[..n].iter_mut().zip(self.drive.velocity()) {
+            *r = v;
+        }
+        self.pass_waypoints(scenario);
+        if !self.is_done() && self.drive.is_at_rest(scenario.drive_limits(), 0.0) {
+            self.phase = Phase::Done(outcome);
+        }
+        if self.is_done() {
+            self.ending = None;
+        } else if self.step >= scenario.settings().max_steps {
+            self.phase = Phase::Done(Outcome::Capped);
+            self.ending = None;
+        }
+        self.last = self.report_step(scenario, target, scenario.settings().time_step_s, false, 0);
+        self.last
+    }
+
     /// The current configuration's error from `target`, and a fresh stall
     /// window from it.
     fn retarget<const M: usize, const W: usize>(
@@ -433,7 +486,7 @@ impl<const N: usize> Planner<N> {
     ) {
         let n = self.n.min(N);
         if !worth_escaping(scenario, target, self.evals.now().error.v) {
-            self.phase = Phase::Done(Outcome::Stalled);
+            self.end(scenario, Outcome::Stalled);
             return;
         }
         let (now, next) = self.evals.both_mut();

@@ -98,6 +98,7 @@ impl<const N: usize> Planner<N> {
             drive,
             velocity_target,
             share,
+            ending,
         } = self;
         let len = start.len().min(N);
         *n = len;
@@ -120,5 +121,6 @@ impl<const N: usize> Planner<N> {
         *drive = DriveState::at_rest(len);
         velocity_target.fill(0.0);
         *share = 1.0;
+        *ending = None;
     }
 }
