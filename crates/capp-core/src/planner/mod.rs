@@ -442,12 +442,9 @@ impl<const N: usize> Planner<N> {
         target: &Target,
         outcome: Outcome,
     ) -> StepReport {
+        // `brake` leaves the rates at the drive's velocities.
         self.brake(scenario, target);
         self.step += 1;
-        let n = self.n.min(N);
-        for (r, &v) in self.rate[..n].iter_mut().zip(self.drive.velocity()) {
-            *r = v;
-        }
         self.pass_waypoints(scenario);
         if !self.is_done() && self.drive.is_at_rest(scenario.drive_limits(), 0.0) {
             self.phase = Phase::Done(outcome);
