@@ -1,6 +1,7 @@
 //! `step()` fed arbitrary robots, obstacles, waypoints, settings and starts,
 //! built through the validating constructors (which must refuse, not panic,
-//! on NaN, inf, inverted limits, ...), then planned for a few steps with the
+//! on NaN, inf, inverted limits, non-rotations, zero axes, ...; DH rows and
+//! general joints, mixed too, and a tool), then planned for a few steps with the
 //! invariants of `capp_fuzz::plan_a_few_steps` checked after each.
 //!
 //! Every number is either any `f32` bit pattern (so the checks see NaN, inf,
@@ -10,7 +11,8 @@
 
 use arbitrary::Arbitrary;
 use capp_core::control::LawKind;
-use capp_core::{Joint, Mission, Robot, Scenario, Settings, SuperEllipsoid, Waypoint};
+use capp_core::robot::{JointOrigin, Placement};
+use capp_core::{Joint, JointKind, Mission, Robot, Scenario, Settings, SuperEllipsoid, Waypoint};
 use capp_fuzz::plan_a_few_steps;
 use libfuzzer_sys::fuzz_target;
 
@@ -60,6 +62,29 @@ struct FuzzJoint {
     max_rate: Num,
     weight: Num,
     start: Num,
+    /// A general joint (URDF-style): its origin and axis; `alpha`, `a` and
+    /// `fixed` are then unused.
+    general: Option<FuzzOrigin>,
+}
+
+#[derive(Arbitrary, Debug)]
+struct FuzzOrigin {
+    /// Euler angles of the rotation, or raw rows.
+    rotation: Result<[Num; 3], [[Num; 3]; 3]>,
+    translation: [Num; 3],
+    axis: [Num; 3],
+}
+
+impl FuzzOrigin {
+    fn placement(&self) -> Placement {
+        Placement {
+            rotation: match &self.rotation {
+                Ok(e) => rotation(e.map(|x| x.get(3.2))),
+                Err(rows) => rows.map(|r| r.map(|x| x.get(1.0))),
+            },
+            translation: self.translation.map(|x| x.get(10.0)),
+        }
+    }
 }
 
 #[derive(Arbitrary, Debug)]
@@ -112,6 +137,8 @@ struct Input {
     obstacles: Vec<FuzzObstacle>,
     waypoints: Vec<FuzzWaypoint>,
     settings: FuzzSettings,
+    /// The end effector's frame in the last joint's.
+    tool: Option<FuzzOrigin>,
 }
 
 /// `R = Rz Ry Rx` rows, from Euler angles.
@@ -173,10 +200,21 @@ fuzz_target!(|input: Input| {
         let min = j.min.get(3.0);
         let max = min + j.span.positive(6.0);
         let rate = j.max_rate.positive(2.0);
-        let joint = if j.prismatic {
-            Joint::prismatic(alpha, a, fixed, min, max, rate)
+        let kind = if j.prismatic {
+            JointKind::Prismatic
         } else {
-            Joint::revolute(alpha, a, fixed, min, max, rate)
+            JointKind::Revolute
+        };
+        let joint = match (&j.general, kind) {
+            (Some(g), _) => {
+                let origin = JointOrigin {
+                    placement: g.placement(),
+                    axis: g.axis.map(|x| x.get(1.0)),
+                };
+                Joint::general(kind, origin, min, max, rate)
+            }
+            (None, JointKind::Prismatic) => Joint::prismatic(alpha, a, fixed, min, max, rate),
+            (None, JointKind::Revolute) => Joint::revolute(alpha, a, fixed, min, max, rate),
         };
         joints.push(joint.with_weight(j.weight.positive(1.0)));
         // Tame starts land inside the limits.
@@ -211,7 +249,11 @@ fuzz_target!(|input: Input| {
         .collect();
     let settings = settings(&input.settings);
 
-    let Ok(robot) = Robot::<32>::new(&joints) else {
+    let tool = input
+        .tool
+        .as_ref()
+        .map_or(Placement::IDENTITY, FuzzOrigin::placement);
+    let Ok(robot) = Robot::<32>::new_with_tool(&joints, &tool) else {
         return;
     };
     let Ok(mission) = Mission::<16>::new(&waypoints, settings) else {

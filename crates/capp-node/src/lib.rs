@@ -895,7 +895,10 @@ fn robot_refusal(e: RobotError) -> Refusal {
         | RobotError::InvertedLimits { joint }
         | RobotError::NonPositiveRate { joint }
         | RobotError::WeightOutOfRange { joint }
-        | RobotError::OutOfRange { joint, .. } => joint,
+        | RobotError::OutOfRange { joint, .. }
+        | RobotError::NotRotation { joint }
+        | RobotError::ZeroAxis { joint }
+        | RobotError::MixedJoints { joint } => joint,
     };
     (ErrorCode::InvalidRobot, index)
 }

@@ -55,6 +55,7 @@ impl From<Joint> for capp_core::Joint {
             max: j.max,
             max_rate: j.max_rate,
             weight: j.weight,
+            origin: None,
         }
     }
 }

@@ -157,6 +157,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 max: std::f32::consts::TAU,
                 max_rate: REVOLUTE_RATE,
                 weight: 1.0,
+                origin: None,
             },
             "0" => Joint {
                 kind: JointKind::Prismatic,
@@ -168,6 +169,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 max: d as f32 + PRISMATIC_RANGE,
                 max_rate: PRISMATIC_RATE,
                 weight: 1.0,
+                origin: None,
             },
             other => {
                 let hint = if joints.len() + 1 < n && other.contains('.') {

@@ -26,8 +26,7 @@ pub mod field;
 pub mod pairs;
 pub mod segment;
 
-use crate::math::max;
-use crate::robot::{JointKind, Robot, MAX_LENGTH};
+use crate::robot::{Robot, MAX_LENGTH};
 
 /// Most links a scenario with self-collision may have (the checked pairs of
 /// a link are one `u64` of bits).
@@ -160,7 +159,7 @@ impl<const N: usize> LinkCapsules<N> {
             .iter_mut()
             .zip(capsules.reach.iter_mut())
             .zip(capsules.checked.iter_mut());
-        for (link, (((&r, &row), joint), ((radius, reach), checked))) in radius
+        for (link, (((&r, &row), _), ((radius, reach), checked))) in radius
             .iter()
             .zip(checked)
             .zip(robot.joints())
@@ -176,13 +175,7 @@ impl<const N: usize> LinkCapsules<N> {
             if row & !(robot_links & after) != 0 {
                 return Err(CapsuleError::BadPair { link: link as u8 });
             }
-            let longest = match joint.kind {
-                JointKind::Revolute => crate::math::sqrt(joint.a * joint.a + joint.d * joint.d),
-                JointKind::Prismatic => {
-                    let d = max(joint.min.abs(), joint.max.abs());
-                    crate::math::sqrt(joint.a * joint.a + d * d)
-                }
-            };
+            let longest = robot.longest_link(link);
             *radius = r;
             *reach = 0.5 * longest + (1.0 + INFLUENCE * CLEARANCE_SCALE) * r;
             *checked = row;

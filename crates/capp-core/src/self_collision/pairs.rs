@@ -26,8 +26,7 @@ use super::segment::closest_points;
 use super::{CapsuleError, MAX_LINKS};
 use crate::escape::rng::Rng;
 use crate::kinematics::{forward_kinematics, Frames};
-use crate::math::max;
-use crate::robot::{JointKind, Robot};
+use crate::robot::Robot;
 
 /// Configurations sampled for [`PairStatus::Always`] (MoveIt's default
 /// density). The test stops early once every candidate pair has been seen
@@ -105,15 +104,10 @@ impl<const N: usize> PairTable<N> {
             rows: [0; N],
         };
         let knuckle = |k: usize| {
-            let Some(joint) = robot.joints().get(k) else {
-                return false;
-            };
-            let d = match joint.kind {
-                JointKind::Revolute => joint.d.abs(),
-                JointKind::Prismatic => max(joint.min.abs(), joint.max.abs()),
-            };
-            let longest = crate::math::sqrt(joint.a * joint.a + d * d);
-            radius.get(k).is_some_and(|&r| longest < 2.0 * r)
+            k < robot.len()
+                && radius
+                    .get(k)
+                    .is_some_and(|&r| robot.longest_link(k) < 2.0 * r)
         };
         for a in 0..n {
             table.status[a][a] = PairStatus::Same;

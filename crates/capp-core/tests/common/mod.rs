@@ -3,6 +3,7 @@
 //! test robots, and `run_checked`, which runs a plan and checks its
 //! invariants at every step.
 #![allow(dead_code)]
+#![allow(clippy::needless_range_loop)] // matrix formulas read best indexed
 
 use capp_core::escape::EscapeState;
 use capp_core::*;
@@ -70,8 +71,17 @@ pub struct Chain64 {
     pub rotations: Vec<M3>,
 }
 
-/// Eq. 5-6 in f64, 4x4 homogeneous products as the paper writes them.
+/// Eq. 5-6 in f64, 4x4 homogeneous products as the paper writes them
+/// (general joints: [`fk64_tool`]).
 pub fn fk64(joints: &[Joint], q: &[f64]) -> Chain64 {
+    if joints.first().is_some_and(|j| j.origin.is_some()) {
+        return fk64_tool(joints, &robot::Placement::IDENTITY, q);
+    }
+    fk64_dh(joints, q)
+}
+
+/// [`fk64`] for a DH chain.
+fn fk64_dh(joints: &[Joint], q: &[f64]) -> Chain64 {
     let mut t = [[0.0f64; 4]; 4];
     for (i, row) in t.iter_mut().enumerate() {
         row[i] = 1.0;
@@ -484,4 +494,197 @@ pub fn pips_capsules(sc: &mut Sc) {
     let table =
         PairTable::<18>::new(sc.robot(), &radius, &allowed, &pips::home(), SAMPLES, 1).unwrap();
     sc.set_link_capsules(&radius, table.checked_rows()).unwrap();
+}
+
+/// 4x4 homogeneous product.
+fn mul4(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
+    let mut c = [[0.0f64; 4]; 4];
+    for r in 0..4 {
+        for k in 0..4 {
+            c[r][k] = (0..4).map(|i| a[r][i] * b[i][k]).sum();
+        }
+    }
+    c
+}
+
+/// A placement as a 4x4 homogeneous matrix, in f64.
+fn homogeneous(p: &robot::Placement) -> [[f64; 4]; 4] {
+    let mut m = [[0.0f64; 4]; 4];
+    for ((row, rotation), &t) in m.iter_mut().zip(&p.rotation).zip(&p.translation) {
+        for (x, &r) in row.iter_mut().zip(rotation) {
+            *x = r as f64;
+        }
+        row[3] = t as f64;
+    }
+    m[3][3] = 1.0;
+    m
+}
+
+/// Any chain in f64 with a tool, written from the URDF convention, not from
+/// the crate's `z`-aligned form: a general joint is `T_j = T_{j-1} O_j
+/// M_j(q_j)` with `M` Rodrigues' rotation about the normalised raw axis (or a
+/// translation along it), all 4x4 homogeneous products; a DH chain is
+/// [`fk64`]; then `end = T_{n-1} tool`. `origins` are the pivots `o_0 ..
+/// o_{n-1}` (a general joint's frame origin before its motion) and the end
+/// effector, as [`capp_core::kinematics::Frames`] stores them.
+pub fn fk64_tool(joints: &[Joint], tool: &robot::Placement, q: &[f64]) -> Chain64 {
+    let tool4 = homogeneous(tool);
+    let split = |t: &[[f64; 4]; 4]| -> (V3, M3) {
+        (
+            [t[0][3], t[1][3], t[2][3]],
+            [
+                [t[0][0], t[0][1], t[0][2]],
+                [t[1][0], t[1][1], t[1][2]],
+                [t[2][0], t[2][1], t[2][2]],
+            ],
+        )
+    };
+    if joints.first().is_some_and(|j| j.origin.is_none()) {
+        let mut chain = fk64_dh(joints, q);
+        let (o, r) = (
+            *chain.origins.last().unwrap(),
+            *chain.rotations.last().unwrap(),
+        );
+        let mut t = [[0.0f64; 4]; 4];
+        for i in 0..3 {
+            t[i][..3].copy_from_slice(&r[i]);
+            t[i][3] = o[i];
+        }
+        t[3][3] = 1.0;
+        let (o, r) = split(&mul4(&t, &tool4));
+        *chain.origins.last_mut().unwrap() = o;
+        *chain.rotations.last_mut().unwrap() = r;
+        return chain;
+    }
+    let mut t = [[0.0f64; 4]; 4];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let mut origins = Vec::new();
+    let mut rotations = Vec::new();
+    for (j, &v) in joints.iter().zip(q) {
+        let origin = j.origin.expect("a general chain");
+        t = mul4(&t, &homogeneous(&origin.placement));
+        let (pivot, frame) = split(&t);
+        origins.push(pivot);
+        rotations.push(frame);
+        let a = origin.axis.map(|x| x as f64);
+        let len = dot(a, a).sqrt();
+        let a = scale(a, 1.0 / len);
+        let mut m = [[0.0f64; 4]; 4];
+        m[3][3] = 1.0;
+        match j.kind {
+            JointKind::Revolute => {
+                let (s, c) = v.sin_cos();
+                let k = [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]];
+                for r in 0..3 {
+                    for col in 0..3 {
+                        let identity = if r == col { 1.0 } else { 0.0 };
+                        m[r][col] = identity * c + (1.0 - c) * a[r] * a[col] + s * k[r][col];
+                    }
+                }
+            }
+            JointKind::Prismatic => {
+                for r in 0..3 {
+                    m[r][r] = 1.0;
+                    m[r][3] = a[r] * v;
+                }
+            }
+        }
+        t = mul4(&t, &m);
+    }
+    let (end, frame) = split(&mul4(&t, &tool4));
+    origins.push(end);
+    rotations.push(frame);
+    Chain64 { origins, rotations }
+}
+
+/// A random chain of `n` general joints (random origins, axes along a
+/// coordinate axis half of the time and anywhere otherwise, of any length
+/// above the minimum), both kinds, and a random tool.
+pub fn random_general_chain(rng: &mut Rng, n: usize) -> (Vec<Joint>, robot::Placement) {
+    let placement = |rng: &mut Rng| {
+        let r = euler123(
+            rng.uniform(-3.0, 3.0),
+            rng.uniform(-1.5, 1.5),
+            rng.uniform(-3.0, 3.0),
+        );
+        robot::Placement {
+            rotation: r.map(|row| row.map(|x| x as f32)),
+            translation: [0; 3].map(|_| rng.uniform(-2.0, 2.0) as f32),
+        }
+    };
+    let joints = (0..n)
+        .map(|_| {
+            let p = placement(rng);
+            let axis = if rng.below(2) == 0 {
+                let mut a = [0.0f32; 3];
+                a[rng.below(3)] = if rng.below(2) == 0 { 1.0 } else { -1.0 };
+                a
+            } else {
+                let length = rng.uniform(0.5, 2.0);
+                let v = [0; 3].map(|_| rng.uniform(-1.0, 1.0));
+                let size = dot(v, v).sqrt().max(1e-3);
+                v.map(|x| (x * length / size) as f32)
+            };
+            let origin = robot::JointOrigin { placement: p, axis };
+            if rng.below(4) == 0 {
+                let lo = rng.uniform(-1.0, 0.5) as f32;
+                Joint::general(
+                    JointKind::Prismatic,
+                    origin,
+                    lo,
+                    lo + rng.uniform(0.5, 2.0) as f32,
+                    1.0,
+                )
+            } else {
+                let lo = rng.uniform(-3.0, -0.5) as f32;
+                Joint::general(
+                    JointKind::Revolute,
+                    origin,
+                    lo,
+                    lo + rng.uniform(1.0, 5.0) as f32,
+                    0.5,
+                )
+            }
+        })
+        .collect();
+    (joints, placement(rng))
+}
+
+/// The same arm as a DH chain, as general joints and a tool: DH joint `k`
+/// is `Rot_z(q) [Trans_z(d) Trans_x(a) Rot_x(alpha)]` (revolute) or
+/// `Trans_z(q) [Rot_z(theta) Trans_x(a) Rot_x(alpha)]` (prismatic), so each
+/// bracket becomes the next joint's origin (the last one the tool), every
+/// axis is `z`, and the first origin is the identity.
+pub fn dh_as_general(joints: &[Joint]) -> (Vec<Joint>, robot::Placement) {
+    let fixed = |j: &Joint| -> robot::Placement {
+        let (theta, d) = match j.kind {
+            JointKind::Revolute => (0.0f64, j.d as f64),
+            JointKind::Prismatic => (j.theta as f64, 0.0),
+        };
+        let (ca, sa) = ((j.alpha as f64).cos(), (j.alpha as f64).sin());
+        let (ct, st) = (theta.cos(), theta.sin());
+        let a = j.a as f64;
+        // Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha): eq. 5's matrix.
+        robot::Placement {
+            rotation: [
+                [ct as f32, (-st * ca) as f32, (st * sa) as f32],
+                [st as f32, (ct * ca) as f32, (-ct * sa) as f32],
+                [0.0, sa as f32, ca as f32],
+            ],
+            translation: [(a * ct) as f32, (a * st) as f32, d as f32],
+        }
+    };
+    let mut previous = robot::Placement::IDENTITY;
+    let mut out = Vec::new();
+    for j in joints {
+        let origin = robot::JointOrigin {
+            placement: previous,
+            axis: [0.0, 0.0, 1.0],
+        };
+        out.push(Joint::general(j.kind, origin, j.min, j.max, j.max_rate).with_weight(j.weight));
+        previous = fixed(j);
+    }
+    (out, previous)
 }

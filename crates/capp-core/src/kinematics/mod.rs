@@ -25,6 +25,8 @@
 //! and for a direction error `e` on `u`, `(J_u^T e)_j = z . (u x e)` or `0`.
 //! Each product costs O(n) after one forward pass; no 6 x n matrix is formed.
 
+mod general;
+
 use crate::math::{sin_cos, Mat3, Vec3};
 use crate::robot::{JointKind, Robot};
 
@@ -130,12 +132,36 @@ impl<const N: usize> Frames<N> {
     }
 }
 
-/// Computes every frame of `robot` at `q` into `frames` (eqs. 5-6).
+/// Computes every frame of `robot` at `q` into `frames` (eqs. 5-6; for
+/// general joints, [`crate::robot::origin`]), then the tool's.
 ///
 /// `q` must hold `robot.len()` values (the caller validated it); extra values
 /// are ignored and missing ones are treated as the end of the chain.
-/// Cost: one [`sin_cos`] per revolute joint and about 40 flops per joint.
+/// Cost: one [`sin_cos`] per revolute joint and about 40 flops per DH joint
+/// (about 80 per general joint).
 pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &mut Frames<N>) {
+    let (o, rot) = if robot.is_general() {
+        general::forward(robot, q, frames)
+    } else {
+        forward_dh(robot, q, frames)
+    };
+    frames.end_rotation = rot;
+    if let Some(tool) = robot.tool_transform() {
+        let end = o + rot * tool.translation;
+        if let Some(last) = frames
+            .n
+            .checked_sub(1)
+            .and_then(|k| frames.link_end.get_mut(k))
+        {
+            *last = end;
+        }
+        frames.end_rotation = rot * tool.rotation;
+    }
+}
+
+/// The DH chain (eq. 5): every frame into `frames` but the end rotation;
+/// returns the last frame's origin and rotation.
+fn forward_dh<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &mut Frames<N>) -> (Vec3, Mat3) {
     let mut rot = Mat3::identity();
     let mut o = Vec3::zeros();
     let mut n = 0;
@@ -169,7 +195,7 @@ pub fn forward_kinematics<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &
         n += 1;
     }
     frames.n = n;
-    frames.end_rotation = rot;
+    (o, rot)
 }
 
 /// `J_p^T f` for a force `f` at the end effector: `out[j] = z_j . ((p - o_j) x f)`

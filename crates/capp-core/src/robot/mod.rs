@@ -12,11 +12,19 @@
 //! (length units). The joint value `q_i` *is* that variable: the fixed DH
 //! column of a revolute joint is its `d`, of a prismatic one its `theta`.
 //!
+//! A joint can also be given as a fixed transform from the previous joint's
+//! frame followed by a motion about its own axis (a URDF joint: [`origin`]);
+//! a robot's joints are all one kind or all the other.
+//!
 //! Joint rates: `max_rate` bounds `|q_i'|` (radians or length per second).
 //! `weight` in `(0, 1]` scales the joint's share of the motion:
 //! `k_i = weight_i * max_rate_i / 2`, which keeps eq. 18's `k_i <= qdot_max / 2`.
 
-use crate::math::all_finite;
+pub mod origin;
+
+use crate::math::{all_finite, Mat3};
+pub use origin::{JointOrigin, Placement};
+use origin::{PlacementFault, Transform};
 
 /// What a joint's variable is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +58,10 @@ pub struct Joint {
     pub max_rate: f32,
     /// Relative weight in `(0, 1]` of this joint in the motion (the listing's `metric`).
     pub weight: f32,
+    /// A general joint's transform and axis ([`origin`]); `None` for a DH
+    /// row. When given, `alpha`, `a`, `theta` and `d` are not used (keep
+    /// them 0).
+    pub origin: Option<JointOrigin>,
 }
 
 impl Joint {
@@ -65,6 +77,7 @@ impl Joint {
             max,
             max_rate,
             weight: 1.0,
+            origin: None,
         }
     }
 
@@ -80,6 +93,31 @@ impl Joint {
             max,
             max_rate,
             weight: 1.0,
+            origin: None,
+        }
+    }
+
+    /// A general joint ([`origin`]): `origin`'s transform from the previous
+    /// joint's frame, then a motion of kind `kind` about or along its axis;
+    /// weight 1.
+    pub fn general(
+        kind: JointKind,
+        origin: JointOrigin,
+        min: f32,
+        max: f32,
+        max_rate: f32,
+    ) -> Self {
+        Joint {
+            kind,
+            alpha: 0.0,
+            a: 0.0,
+            theta: 0.0,
+            d: 0.0,
+            min,
+            max,
+            max_rate,
+            weight: 1.0,
+            origin: Some(origin),
         }
     }
 
@@ -120,7 +158,14 @@ pub enum JointField {
     MaxRate,
     /// `weight`
     Weight,
+    /// A general joint's (or the tool's) transform ([`Placement`]).
+    Origin,
+    /// A general joint's axis.
+    Axis,
 }
+
+/// The `joint` of a [`RobotError`] about the tool ([`Robot::new_with_tool`]).
+pub const TOOL: u8 = u8::MAX;
 
 /// Why a robot description was rejected. `joint` is 0-based.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,6 +202,22 @@ pub enum RobotError {
         /// The joint.
         joint: u8,
     },
+    /// A general joint's (or the tool's) rotation is not a proper rotation
+    /// (orthonormal, determinant +1, to [`origin::ROTATION_TOLERANCE`]).
+    NotRotation {
+        /// The joint, or [`TOOL`].
+        joint: u8,
+    },
+    /// A general joint's axis is (nearly) zero.
+    ZeroAxis {
+        /// The joint.
+        joint: u8,
+    },
+    /// A DH row and a general joint in one robot.
+    MixedJoints {
+        /// The first joint of the other kind.
+        joint: u8,
+    },
     /// `|a|`, `|d|` or a prismatic limit beyond [`MAX_LENGTH`], or a revolute
     /// limit beyond [`MAX_ANGLE`]: sizes that would overflow `f32` products.
     OutOfRange {
@@ -182,23 +243,49 @@ impl core::fmt::Display for JointField {
             JointField::Limits => "limits",
             JointField::MaxRate => "max_rate",
             JointField::Weight => "weight",
+            JointField::Origin => "origin",
+            JointField::Axis => "axis",
         })
+    }
+}
+
+/// "joint 3" (1-based) or "the tool".
+struct Which(u8);
+
+impl core::fmt::Display for Which {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.0 == TOOL {
+            f.write_str("the tool")
+        } else {
+            write!(f, "joint {}", self.0 as u32 + 1)
+        }
     }
 }
 
 impl core::fmt::Display for RobotError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
+            RobotError::NotRotation { joint } => {
+                write!(
+                    f,
+                    "{}: origin rotation is not a proper rotation",
+                    Which(joint)
+                )
+            }
+            RobotError::ZeroAxis { joint } => {
+                write!(f, "{}: the axis has no length", Which(joint))
+            }
+            RobotError::MixedJoints { joint } => write!(
+                f,
+                "{}: DH rows and general joints cannot be mixed in one robot",
+                Which(joint)
+            ),
             RobotError::Empty => write!(f, "the robot has no joints"),
             RobotError::TooManyJoints { count, capacity } => {
                 write!(f, "{count} joints, more than the capacity of {capacity}")
             }
             RobotError::NotFinite { joint, field } => {
-                write!(
-                    f,
-                    "joint {}: {field} is not a finite number",
-                    joint as u32 + 1
-                )
+                write!(f, "{}: {field} is not a finite number", Which(joint))
             }
             RobotError::InvertedLimits { joint } => {
                 write!(
@@ -214,11 +301,7 @@ impl core::fmt::Display for RobotError {
                 write!(f, "joint {}: weight must be in (0, 1]", joint as u32 + 1)
             }
             RobotError::OutOfRange { joint, field } => {
-                write!(
-                    f,
-                    "joint {}: {field} is implausibly large",
-                    joint as u32 + 1
-                )
+                write!(f, "{}: {field} is implausibly large", Which(joint))
             }
         }
     }
@@ -232,6 +315,12 @@ pub(crate) struct LinkConstants {
     /// `cos theta`, `sin theta` of a prismatic joint (unused for revolute).
     pub(crate) cos_theta: f32,
     pub(crate) sin_theta: f32,
+    /// A general joint's origin, turned so that its axis is `z`
+    /// ([`origin::align_z`]); identity for a DH row.
+    pub(crate) origin: Transform,
+    /// The longest this link's chord (from its joint's pivot to the next
+    /// pivot, or to the end effector) is in any configuration, length units.
+    pub(crate) longest: f32,
     /// Length of the chain from the base to the end of this link (`o_{j+1}`),
     /// prismatic links at their longest: an upper bound, in every
     /// configuration, on the distance between any two points of the arm up to
@@ -244,16 +333,37 @@ pub(crate) struct LinkConstants {
 pub struct Robot<const N: usize> {
     joints: heapless::Vec<Joint, N>,
     links: [LinkConstants; N],
+    /// The tool as given (the end effector's frame in the last joint's frame).
+    tool: Placement,
+    /// The tool as the forward pass applies it (for general joints, in the
+    /// last joint's `z`-aligned frame).
+    tool_transform: Transform,
+    /// Whether `tool_transform` is not the identity (a DH robot without a
+    /// tool skips it: its plans are the same to the bit as before tools).
+    has_tool: bool,
+    /// Whether the joints are general joints ([`origin`]), not DH rows.
+    general: bool,
+    /// How far the first joint's pivot is from the base, length units.
+    base_offset: f32,
 }
 
 impl<const N: usize> Robot<N> {
     /// Checks every joint and precomputes the link constants.
     ///
     /// Rejects: an empty chain, more than `N` joints (or more than 255), any
-    /// non-finite field, `min >= max`, `max_rate <= 0`, weight outside `(0, 1]`.
+    /// non-finite field, `min >= max`, `max_rate <= 0`, weight outside `(0, 1]`,
+    /// DH rows mixed with general joints, a general joint's rotation that is
+    /// not one or its axis of no length.
     pub fn new(joints: &[Joint]) -> Result<Self, RobotError> {
+        Self::new_with_tool(joints, &Placement::IDENTITY)
+    }
+
+    /// [`Robot::new`] with a tool: the end effector is `tool` in the last
+    /// joint's frame (for a DH robot, frame `n`; for general joints, the
+    /// last joint's moved frame). The identity gives [`Robot::new`]'s robot.
+    pub fn new_with_tool(joints: &[Joint], tool: &Placement) -> Result<Self, RobotError> {
         let mut robot = Self::empty();
-        robot.init(joints)?;
+        robot.init_with_tool(joints, tool)?;
         Ok(robot)
     }
 
@@ -264,13 +374,23 @@ impl<const N: usize> Robot<N> {
         Robot {
             joints: heapless::Vec::new(),
             links: [LinkConstants::default(); N],
+            tool: Placement::IDENTITY,
+            tool_transform: Transform::default(),
+            has_tool: false,
+            general: false,
+            base_offset: 0.0,
         }
     }
 
     /// [`Robot::new`] in place: the same checks, the same robot, no
     /// robot-sized value on the stack. On error `self` is left empty.
     pub fn init(&mut self, joints: &[Joint]) -> Result<(), RobotError> {
-        let result = self.fill(joints);
+        self.init_with_tool(joints, &Placement::IDENTITY)
+    }
+
+    /// [`Robot::new_with_tool`] in place. On error `self` is left empty.
+    pub fn init_with_tool(&mut self, joints: &[Joint], tool: &Placement) -> Result<(), RobotError> {
+        let result = self.fill(joints, tool);
         if result.is_err() {
             self.clear();
         }
@@ -279,26 +399,48 @@ impl<const N: usize> Robot<N> {
 
     /// Empties the robot (see [`Robot::empty`]).
     pub(crate) fn clear(&mut self) {
-        let Robot { joints, links } = self;
+        let Robot {
+            joints,
+            links,
+            tool,
+            tool_transform,
+            has_tool,
+            general,
+            base_offset,
+        } = self;
         joints.clear();
         links.fill(LinkConstants::default());
+        *tool = Placement::IDENTITY;
+        *tool_transform = Transform::default();
+        *has_tool = false;
+        *general = false;
+        *base_offset = 0.0;
     }
 
-    fn fill(&mut self, joints: &[Joint]) -> Result<(), RobotError> {
+    fn fill(&mut self, joints: &[Joint], tool: &Placement) -> Result<(), RobotError> {
         // Every field is rebuilt: a field added to `Robot` fails to compile here.
-        let Robot { joints: out, links } = self;
-        out.clear();
-        links.fill(LinkConstants::default());
+        self.clear();
+        let Robot {
+            joints: out,
+            links,
+            tool: tool_out,
+            tool_transform,
+            has_tool,
+            general,
+            base_offset,
+        } = self;
         if joints.is_empty() {
             return Err(RobotError::Empty);
         }
-        if joints.len() > N || joints.len() > u8::MAX as usize {
+        if joints.len() > N || joints.len() > u8::MAX as usize - 1 {
             return Err(RobotError::TooManyJoints {
                 count: joints.len(),
-                capacity: N.min(u8::MAX as usize),
+                capacity: N.min(u8::MAX as usize - 1),
             });
         }
-        let mut chain = 0.0f32;
+        let is_general = joints.first().is_some_and(|j| j.origin.is_some());
+        // The previous joint's alignment `A_{j-1}` (the base's: identity).
+        let mut previous_align = Mat3::identity();
         for (i, (j, link)) in joints.iter().zip(links.iter_mut()).enumerate() {
             let joint = i as u8;
             let fields = [
@@ -338,23 +480,88 @@ impl<const N: usize> Robot<N> {
             if !(j.weight > 0.0 && j.weight <= 1.0) {
                 return Err(RobotError::WeightOutOfRange { joint });
             }
+            let travel = crate::math::max(j.min.abs(), j.max.abs());
             let (sin_alpha, cos_alpha) = crate::math::sin_cos(j.alpha);
             let (sin_theta, cos_theta) = crate::math::sin_cos(j.theta);
+            let mut origin = Transform::default();
             // The link from o_j to o_{j+1} is `d z + a x`: |.| = sqrt(a^2 + d^2).
-            let d = match j.kind {
-                JointKind::Revolute => j.d.abs(),
-                JointKind::Prismatic => j.min.abs().max(j.max.abs()),
+            // (A general link's chord is known once the next joint is: below.)
+            let mut longest = {
+                let d = match j.kind {
+                    JointKind::Revolute => j.d.abs(),
+                    JointKind::Prismatic => travel,
+                };
+                crate::math::sqrt(j.a * j.a + d * d)
             };
-            chain += crate::math::sqrt(j.a * j.a + d * d);
+            match (j.origin, is_general) {
+                (None, false) => {}
+                (Some(o), true) => {
+                    let fault = |fault| placement_error(joint, fault);
+                    let placed = origin::validate(&o.placement, MAX_LENGTH).map_err(fault)?;
+                    let axis = origin::unit_axis(&o.axis).map_err(|f| match f {
+                        PlacementFault::NotFinite => RobotError::NotFinite {
+                            joint,
+                            field: JointField::Axis,
+                        },
+                        f => placement_error(joint, f),
+                    })?;
+                    let align = origin::align_z(&axis);
+                    origin = Transform {
+                        rotation: previous_align.transpose() * placed.rotation * align,
+                        translation: previous_align.transpose() * placed.translation,
+                    };
+                    previous_align = align;
+                    if i == 0 {
+                        *base_offset = crate::math::norm(&placed.translation);
+                    }
+                    longest = match j.kind {
+                        JointKind::Revolute => 0.0,
+                        JointKind::Prismatic => travel,
+                    };
+                }
+                _ => return Err(RobotError::MixedJoints { joint }),
+            }
             *link = LinkConstants {
                 cos_alpha,
                 sin_alpha,
                 cos_theta,
                 sin_theta,
-                chain,
+                origin,
+                longest,
+                chain: 0.0,
             };
             // Capacity was checked above, so the push cannot fail.
             let _ = out.push(*j);
+        }
+        let placed_tool =
+            origin::validate(tool, MAX_LENGTH).map_err(|f| placement_error(TOOL, f))?;
+        *tool_transform = Transform {
+            rotation: previous_align.transpose() * placed_tool.rotation,
+            translation: previous_align.transpose() * placed_tool.translation,
+        };
+        *tool_out = *tool;
+        *has_tool = *tool_transform != Transform::default();
+        *general = is_general;
+        // A general link's chord ends at the next joint's pivot (or the
+        // tool): its length is that placement's translation (plus the
+        // travel of a prismatic joint, added above).
+        let n = out.len();
+        let next_offsets: [f32; N] = core::array::from_fn(|k| {
+            if k + 1 < n {
+                crate::math::norm(&links[k + 1].origin.translation)
+            } else {
+                crate::math::norm(&tool_transform.translation)
+            }
+        });
+        let mut chain = 0.0f32;
+        for (k, (link, offset)) in links.iter_mut().zip(next_offsets).take(n).enumerate() {
+            // A DH chain's links are complete but for a tool, which extends
+            // the last one.
+            if is_general || (*has_tool && k + 1 == n) {
+                link.longest += offset;
+            }
+            chain += link.longest;
+            link.chain = chain;
         }
         Ok(())
     }
@@ -385,6 +592,32 @@ impl<const N: usize> Robot<N> {
         &self.links[..self.len()]
     }
 
+    /// Whether the joints are general joints ([`origin`]), not DH rows.
+    #[inline]
+    pub fn is_general(&self) -> bool {
+        self.general
+    }
+
+    /// The tool: the end effector's frame in the last joint's frame
+    /// (identity unless given to [`Robot::new_with_tool`]).
+    #[inline]
+    pub fn tool(&self) -> &Placement {
+        &self.tool
+    }
+
+    /// The tool as the forward pass applies it, when it is not the identity.
+    #[inline]
+    pub(crate) fn tool_transform(&self) -> Option<&Transform> {
+        self.has_tool.then_some(&self.tool_transform)
+    }
+
+    /// The longest link `j`'s chord (from its joint's pivot to the next
+    /// pivot, or the end effector) is in any configuration, length units.
+    #[inline]
+    pub fn longest_link(&self, j: usize) -> f32 {
+        self.links().get(j).map_or(0.0, |l| l.longest)
+    }
+
     /// The robot's reach, length units: the length of the whole chain, every
     /// prismatic joint at its longest. No point of the arm is ever farther
     /// than this from the base. It is the robot's characteristic length: the
@@ -393,7 +626,7 @@ impl<const N: usize> Robot<N> {
     /// described in inches or in metres.
     #[inline]
     pub fn reach(&self) -> f32 {
-        self.links().last().map_or(0.0, |l| l.chain)
+        self.base_offset + self.links().last().map_or(0.0, |l| l.chain)
     }
 
     /// The first joint whose value in `q` is outside its limits, or not finite.
@@ -407,6 +640,22 @@ impl<const N: usize> Robot<N> {
     /// Whether `q` has one finite value per joint, each within its limits.
     pub fn accepts(&self, q: &[f32]) -> bool {
         q.len() == self.len() && all_finite(q) && self.first_outside_limits(q).is_none()
+    }
+}
+
+/// A placement fault as the robot's error, for `joint` (or [`TOOL`]).
+fn placement_error(joint: u8, fault: PlacementFault) -> RobotError {
+    match fault {
+        PlacementFault::NotFinite => RobotError::NotFinite {
+            joint,
+            field: JointField::Origin,
+        },
+        PlacementFault::NotRotation => RobotError::NotRotation { joint },
+        PlacementFault::TooFar => RobotError::OutOfRange {
+            joint,
+            field: JointField::Origin,
+        },
+        PlacementFault::ZeroAxis => RobotError::ZeroAxis { joint },
     }
 }
 
