@@ -131,7 +131,7 @@ pub enum Problem {
     #[error("velocity limit {0} is negative")]
     NegativeVelocity(f64),
     /// A negative size of a `<collision>` shape.
-    #[error("collision {0} is negative")]
+    #[error("{0} is negative")]
     NegativeSize(&'static str),
     /// A `<mesh filename>` that resolves to no existing file.
     #[error("mesh `{filename}` not found ({looked})")]
