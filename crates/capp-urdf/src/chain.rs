@@ -134,7 +134,9 @@ impl Capsule {
 }
 
 impl ChainJoint {
-    /// M(q): this joint's motion at value `q` (radians or metres).
+    /// M(q): this joint's motion at value `q`: the rotation by `q` radians
+    /// about `axis` (revolute, continuous) or the translation by `q * axis`
+    /// metres (prismatic), in this joint's frame.
     pub fn motion(&self, q: f64) -> Isometry3<f64> {
         match self.kind {
             JointKind::Revolute | JointKind::Continuous => Isometry3::from_parts(
@@ -152,6 +154,14 @@ impl ChainJoint {
 impl Chain {
     /// The frame of each moving joint at `q`, in the base link's frame, then
     /// the tip link's frame last: `joints.len() + 1` poses.
+    ///
+    /// ```text
+    /// T_0     = I                                   (base link frame)
+    /// T_{i+1} = T_i * origin_i * M_i(q_i)           (frame of joints[i])
+    /// T_tip   = T_n * tool
+    /// ```
+    ///
+    /// with M_i from [`ChainJoint::motion`].
     ///
     /// `q` holds one value per moving joint (radians or metres); limits are
     /// not checked. Errors: wrong length, a non-finite value.
