@@ -16,7 +16,8 @@
 //!   `<axis xyz>` (default 1 0 0), `<limit lower upper velocity>`, `<mimic>`
 //!   (refused on the chain). Joints inside `<transmission>` are ignored.
 //! - Mesh files: STL (binary and ASCII), OBJ, Collada; `package://NAME/...`
-//!   looked up in [`LoadOptions::package_dirs`], `file://` and paths relative
+//!   looked up in [`LoadOptions::packages`] and
+//!   [`LoadOptions::package_dirs`], `file://` and paths relative
 //!   to the URDF file's directory.
 //!
 //! ## Frames and units
@@ -74,6 +75,10 @@ pub struct LoadOptions {
     /// (or the only child); an error naming the leaves when that is
     /// ambiguous (e.g. a gripper with two fingers).
     pub tip_link: Option<String>,
+    /// Where named ROS packages are (`NAME`, its root directory):
+    /// `package://NAME/rest` is `ROOT/rest`. Looked at before
+    /// [`LoadOptions::package_dirs`]; what `ros2 pkg prefix` would answer.
+    pub packages: Vec<(String, PathBuf)>,
     /// Directories holding ROS packages: `package://NAME/rest` is
     /// `DIR/NAME/rest` for the first `DIR` where that file exists.
     pub package_dirs: Vec<PathBuf>,
@@ -117,6 +122,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Chain, UrdfError> {
     }
     let settings = geometry::MeshSettings {
         urdf_dir: path.parent().unwrap_or(Path::new(".")),
+        packages: &options.packages,
         package_dirs: &options.package_dirs,
         count: options.capsules_per_mesh,
     };

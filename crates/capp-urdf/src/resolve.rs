@@ -1,7 +1,8 @@
 //! Where a `<mesh filename>` points on disk.
 //!
-//! - `package://NAME/rest`: `DIR/NAME/rest` for the first `DIR` of
-//!   `package_dirs` where that file exists (as ROS and Pinocchio do);
+//! - `package://NAME/rest`: `ROOT/rest` if `packages` names `NAME`'s
+//!   `ROOT`, else `DIR/NAME/rest` for the first `DIR` of `package_dirs`
+//!   where that file exists (as ROS and Pinocchio do);
 //! - `file:///abs/path`: that absolute path (a relative `file://` path is
 //!   taken relative to the URDF file's directory);
 //! - anything else: a path, relative to the URDF file's directory unless
@@ -15,6 +16,7 @@ use crate::error::Problem;
 pub(crate) fn resolve(
     filename: &str,
     urdf_dir: &Path,
+    packages: &[(String, PathBuf)],
     package_dirs: &[PathBuf],
 ) -> Result<PathBuf, Problem> {
     let not_found = |looked: String| Problem::MeshNotFound {
@@ -22,10 +24,15 @@ pub(crate) fn resolve(
         looked,
     };
     if let Some(rest) = filename.strip_prefix("package://") {
-        if package_dirs.is_empty() {
-            return Err(not_found("no package_dirs given".into()));
+        let (name, inside) = rest.split_once('/').unwrap_or((rest, ""));
+        let named = packages.iter().filter(|(n, _)| n == name);
+        let mut candidates: Vec<PathBuf> = named.map(|(_, root)| root.join(inside)).collect();
+        candidates.extend(package_dirs.iter().map(|dir| dir.join(rest)));
+        if candidates.is_empty() {
+            return Err(not_found(format!(
+                "no package \"{name}\" or package_dirs given"
+            )));
         }
-        let candidates: Vec<PathBuf> = package_dirs.iter().map(|dir| dir.join(rest)).collect();
         return match candidates.iter().find(|path| path.is_file()) {
             Some(path) => Ok(path.clone()),
             None => Err(not_found(format!("looked at {}", list(&candidates)))),
@@ -59,19 +66,27 @@ mod tests {
         std::fs::write(&mesh, b"solid x\nendsolid x\n").unwrap();
         let dirs = [first.clone(), second.clone()];
 
-        let found = resolve("package://pkg/meshes/m.stl", &first, &dirs).unwrap();
+        let found = resolve("package://pkg/meshes/m.stl", &first, &[], &dirs).unwrap();
         assert_eq!(found, mesh);
+        let named = [("pkg".to_string(), second.join("pkg"))];
+        let found = resolve("package://pkg/meshes/m.stl", &first, &named, &[]).unwrap();
+        assert_eq!(found, mesh);
+        let other = [("other".to_string(), second.join("pkg"))];
+        assert!(resolve("package://pkg/meshes/m.stl", &first, &other, &[]).is_err());
         let uri = format!("file://{}", mesh.display());
-        assert_eq!(resolve(&uri, &first, &[]).unwrap(), mesh);
-        assert_eq!(resolve("pkg/meshes/m.stl", &second, &[]).unwrap(), mesh);
+        assert_eq!(resolve(&uri, &first, &[], &[]).unwrap(), mesh);
+        assert_eq!(
+            resolve("pkg/meshes/m.stl", &second, &[], &[]).unwrap(),
+            mesh
+        );
 
-        let missing = resolve("package://pkg/meshes/n.stl", &first, &dirs).unwrap_err();
+        let missing = resolve("package://pkg/meshes/n.stl", &first, &[], &dirs).unwrap_err();
         let message = missing.to_string();
         assert!(
             message.contains("n.stl") && message.contains(", "),
             "{message}"
         );
-        let none = resolve("package://pkg/meshes/m.stl", &first, &[]).unwrap_err();
-        assert!(none.to_string().contains("no package_dirs"));
+        let none = resolve("package://pkg/meshes/m.stl", &first, &[], &[]).unwrap_err();
+        assert!(none.to_string().contains("no package \"pkg\""), "{none}");
     }
 }

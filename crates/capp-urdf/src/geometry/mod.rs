@@ -43,6 +43,7 @@ pub(crate) struct MeshSettings<'a> {
     /// The URDF file's directory, for relative mesh paths.
     pub urdf_dir: &'a Path,
     /// Directories that hold ROS packages, for `package://`.
+    pub packages: &'a [(String, PathBuf)],
     pub package_dirs: &'a [PathBuf],
     /// Capsules per mesh.
     pub count: CapsuleCount,
@@ -72,7 +73,12 @@ pub(crate) fn capsules(
                 Some(s) => pose::vector(**s, "mesh scale")?,
                 None => Vector3::repeat(1.0),
             };
-            let path = resolve(filename, settings.urdf_dir, settings.package_dirs)?;
+            let path = resolve(
+                filename,
+                settings.urdf_dir,
+                settings.packages,
+                settings.package_dirs,
+            )?;
             let mesh = mesh::read(&path, filename)?;
             let placed: Vec<Point3<f64>> = mesh
                 .vertices
