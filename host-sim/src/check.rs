@@ -57,22 +57,33 @@ pub const RATE_SLACK: f64 = 1.0e-4;
 /// self-collision ([`self_tolerance`]; the module docs say why).
 pub const SELF_SLACK: f64 = 1.0e-5;
 
-/// The arm's size, length units: 1 plus every joint's `|a| + |d|` (and a
-/// prismatic joint's largest extension); the tolerances of the
-/// kinematics and self-collision checks are fractions of it.
+/// The arm's size, length units: 1 plus every DH joint's `|a| + |d|` (and
+/// a prismatic joint's largest extension); for general joints, 1 plus the
+/// first one's distance from the base and every link's longest chord
+/// ([`crate::geometry::longest_links`]). The tolerances of the kinematics
+/// and self-collision checks are fractions of it.
 pub fn scale(problem: &Problem) -> f64 {
-    1.0 + problem
-        .joints
-        .iter()
-        .map(|j| {
-            j.a.abs() as f64
-                + j.d.abs() as f64
-                + match j.kind {
-                    JointKind::Prismatic => j.min.abs().max(j.max.abs()) as f64,
-                    JointKind::Revolute => 0.0,
-                }
-        })
-        .sum::<f64>()
+    let norm = |t: [f32; 3]| t.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>().sqrt();
+    if let Some(first) = problem.joints.first().and_then(|j| j.origin) {
+        return 1.0
+            + norm(first.placement.translation)
+            + crate::geometry::longest_links(&problem.joints, &problem.tool)
+                .iter()
+                .sum::<f64>();
+    }
+    1.0 + norm(problem.tool.translation)
+        + problem
+            .joints
+            .iter()
+            .map(|j| {
+                j.a.abs() as f64
+                    + j.d.abs() as f64
+                    + match j.kind {
+                        JointKind::Prismatic => j.min.abs().max(j.max.abs()) as f64,
+                        JointKind::Revolute => 0.0,
+                    }
+            })
+            .sum::<f64>()
 }
 
 /// How far two capsules may overlap before it counts as a self-collision,

@@ -5,7 +5,9 @@
 //! Nothing here uses the planner's kinematics, obstacles, potential or link
 //! capsules (only the scenario's list of checked link pairs): the
 //! forward kinematics are 4x4 `f64` products of the DH matrices (eq. 5,
-//! `A = Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha)`), and each obstacle is
+//! `A = Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha)`), or for general
+//! (URDF) joints of each joint's origin and Rodrigues' rotation about its
+//! raw axis ([`forward_chain`]), and each obstacle is
 //! evaluated directly from eq. 25 in `f64`:
 //!
 //! ```text
@@ -41,7 +43,7 @@
 //! ```
 //!
 //! (`l_i` the longest chord link `i` can have: `sqrt(a_i^2 + d_i^2)`, `d_i`
-//! at its largest extension for a prismatic joint), so a pair's gap moves
+//! at its largest extension for a prismatic joint; [`longest_links`]), so a pair's gap moves
 //! by at most `delta_a + delta_b` over the segment and stays at or above
 //! `(gap(a) + gap(b) - delta_a - delta_b) / 2` all along it.
 //! [`Geometry::sweep_links`] bisects the segment wherever that bound does
@@ -58,6 +60,7 @@
 //! case generation and certification that depend on it repeat bit for bit.
 
 use capp_core::self_collision::pairs::PairStatus;
+use capp_core::robot::Placement;
 use capp_core::{Joint, JointKind};
 
 use crate::problem::Problem;
@@ -88,11 +91,16 @@ fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> M4 {
 
 /// Frame origins `o_0..o_n` and the end transform, in `f64`.
 pub fn forward(problem: &Problem, q: &[f64]) -> (Vec<[f64; 3]>, M4) {
-    forward_chain(&problem.joints, q)
+    forward_chain(&problem.joints, &problem.tool, q)
 }
 
-/// [`forward`] for a bare chain of joints.
-pub fn forward_chain(joints: &[Joint], q: &[f64]) -> (Vec<[f64; 3]>, M4) {
+/// [`forward`] for a bare chain of joints and a tool: DH rows (eq. 5), or
+/// general joints as URDF writes them (`T_j = T_{j-1} O_j M_j(q_j)`, `M`
+/// Rodrigues' rotation about the normalised axis or a slide along it), then
+/// `end = T_n tool`. The points are each joint's pivot (a general joint's
+/// frame origin before its motion; DH: `o_0 = 0`, `o_1`, ...) and the end
+/// effector: link `k` runs from point `k` to point `k + 1`.
+pub fn forward_chain(joints: &[Joint], tool: &Placement, q: &[f64]) -> (Vec<[f64; 3]>, M4) {
     let mut t: M4 = [
         [1.0, 0.0, 0.0, 0.0],
         [0.0, 1.0, 0.0, 0.0],
@@ -100,16 +108,113 @@ pub fn forward_chain(joints: &[Joint], q: &[f64]) -> (Vec<[f64; 3]>, M4) {
         [0.0, 0.0, 0.0, 1.0],
     ];
     let mut origins = Vec::with_capacity(joints.len() + 1);
-    origins.push([0.0; 3]);
+    let general = joints.first().is_some_and(|j| j.origin.is_some());
+    if !general {
+        origins.push([0.0; 3]);
+    }
     for (joint, &qj) in joints.iter().zip(q) {
-        let (theta, d) = match joint.kind {
-            JointKind::Revolute => (qj, joint.d as f64),
-            JointKind::Prismatic => (joint.theta as f64, qj),
-        };
-        t = mul(&t, &dh(theta, d, joint.a as f64, joint.alpha as f64));
-        origins.push([t[0][3], t[1][3], t[2][3]]);
+        match joint.origin {
+            None => {
+                let (theta, d) = match joint.kind {
+                    JointKind::Revolute => (qj, joint.d as f64),
+                    JointKind::Prismatic => (joint.theta as f64, qj),
+                };
+                t = mul(&t, &dh(theta, d, joint.a as f64, joint.alpha as f64));
+                origins.push([t[0][3], t[1][3], t[2][3]]);
+            }
+            Some(origin) => {
+                t = mul(&t, &homogeneous(&origin.placement));
+                origins.push([t[0][3], t[1][3], t[2][3]]);
+                t = mul(&t, &motion(joint.kind, origin.axis, qj));
+            }
+        }
+    }
+    if !tool.is_identity() || general {
+        t = mul(&t, &homogeneous(tool));
+        if general {
+            origins.push([t[0][3], t[1][3], t[2][3]]);
+        } else if let Some(last) = origins.last_mut() {
+            *last = [t[0][3], t[1][3], t[2][3]];
+        }
     }
     (origins, t)
+}
+
+/// A placement as a 4x4 homogeneous matrix.
+fn homogeneous(p: &Placement) -> M4 {
+    let mut m = [[0.0; 4]; 4];
+    for ((row, r), &t) in m.iter_mut().zip(&p.rotation).zip(&p.translation) {
+        for (x, &v) in row.iter_mut().zip(r) {
+            *x = v as f64;
+        }
+        row[3] = t as f64;
+    }
+    m[3][3] = 1.0;
+    m
+}
+
+/// A general joint's motion by `q` about (along) `axis`, normalised here:
+/// Rodrigues' `R = cos q I + (1 - cos q) a a^T + sin q [a]x`.
+fn motion(kind: JointKind, axis: [f32; 3], q: f64) -> M4 {
+    let a = axis.map(|x| x as f64);
+    let length = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let a = a.map(|x| x / length);
+    let mut m = [[0.0; 4]; 4];
+    m[3][3] = 1.0;
+    match kind {
+        JointKind::Revolute => {
+            let (s, c) = libm::sincos(q);
+            let k = [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]];
+            for (i, row) in m.iter_mut().take(3).enumerate() {
+                for (j, x) in row.iter_mut().take(3).enumerate() {
+                    let identity = if i == j { c } else { 0.0 };
+                    *x = identity + (1.0 - c) * a[i] * a[j] + s * k[i][j];
+                }
+            }
+        }
+        JointKind::Prismatic => {
+            for (i, row) in m.iter_mut().take(3).enumerate() {
+                row[i] = 1.0;
+                row[3] = a[i] * q;
+            }
+        }
+    }
+    m
+}
+
+/// The longest chord each link can have, length units (`l_k` of the module
+/// docs): DH `sqrt(a^2 + d^2)` (`d` at its largest extension for a
+/// prismatic joint); a general link the distance to the next joint's
+/// origin (or the tool's), plus a prismatic joint's largest extension; the
+/// tool lengthens the last link.
+pub fn longest_links(joints: &[Joint], tool: &Placement) -> Vec<f64> {
+    let norm = |t: [f32; 3]| t.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>().sqrt();
+    let tool_length = norm(tool.translation);
+    let n = joints.len();
+    joints
+        .iter()
+        .enumerate()
+        .map(|(k, j)| {
+            let travel = (j.min.abs() as f64).max(j.max.abs() as f64);
+            let next = match joints.get(k + 1).and_then(|next| next.origin) {
+                Some(o) => norm(o.placement.translation),
+                None if k + 1 == n => tool_length,
+                None => 0.0,
+            };
+            match (j.origin, j.kind) {
+                (Some(_), JointKind::Revolute) => next,
+                (Some(_), JointKind::Prismatic) => next + travel,
+                (None, kind) => {
+                    let d = match kind {
+                        JointKind::Revolute => j.d.abs() as f64,
+                        JointKind::Prismatic => travel,
+                    };
+                    let tool = if k + 1 == n { tool_length } else { 0.0 };
+                    (j.a as f64).hypot(d) + tool
+                }
+            }
+        })
+        .collect()
 }
 
 /// `R = Rz(rz) Ry(ry) Rx(rx)`.
@@ -333,6 +438,7 @@ struct Links {
 /// of the planner, like [`crate::check::check`]).
 pub struct Geometry {
     joints: Vec<Joint>,
+    tool: Placement,
     shapes: Vec<Shape>,
     interior: usize,
     margins: [f64; 2],
@@ -374,6 +480,7 @@ impl Geometry {
         let avoid = &problem.settings.avoidance;
         Geometry {
             joints: problem.joints.clone(),
+            tool: problem.tool,
             shapes: problem
                 .obstacles
                 .iter()
@@ -387,23 +494,13 @@ impl Geometry {
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
             links: Links::new(problem),
-            longest: problem
-                .joints
-                .iter()
-                .map(|j| {
-                    let d = match j.kind {
-                        JointKind::Revolute => j.d.abs() as f64,
-                        JointKind::Prismatic => (j.min.abs() as f64).max(j.max.abs() as f64),
-                    };
-                    (j.a as f64).hypot(d)
-                })
-                .collect(),
+            longest: longest_links(&problem.joints, &problem.tool),
         }
     }
 
     /// Frame origins `o_0..o_n` and the end transform at `q`.
     pub fn forward(&self, q: &[f64]) -> (Vec<[f64; 3]>, M4) {
-        forward_chain(&self.joints, q)
+        forward_chain(&self.joints, &self.tool, q)
     }
 
     /// Calls `f(c, point, obstacle)` with `C - 1` of every avoidance point /

@@ -14,6 +14,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use capp_core::robot::{Placement, RobotError};
 use capp_core::self_collision::pairs::{PairTable, SAMPLES};
 use capp_core::{
     Joint, Mission, MissionError, Planner, Robot, Scenario, ScenarioError, SetpointFilter,
@@ -193,8 +194,11 @@ pub struct Problem {
     pub kind: SourceKind,
     /// Name of the length unit, for labels ("in", "m").
     pub length_unit: String,
-    /// The joints.
+    /// The joints: DH rows, or general joints (a URDF robot).
     pub joints: Vec<Joint>,
+    /// The end effector's frame in the last joint's (a URDF robot's fixed
+    /// joints after its last moving one); the identity for a DH table.
+    pub tool: Placement,
     /// Joint names (for messages and plots).
     pub joint_names: Vec<String>,
     /// The obstacles.
@@ -226,9 +230,14 @@ impl Problem {
         LoadError::new(&self.source, line, message)
     }
 
+    /// The core robot: the joints and the tool, validated.
+    pub fn robot(&self) -> Result<Robot<MAX_JOINTS>, RobotError> {
+        Robot::new_with_tool(&self.joints, &self.tool)
+    }
+
     /// The validated core scenario.
     pub fn scenario(&self) -> Result<CoreScenario, LoadError> {
-        let robot = Robot::<MAX_JOINTS>::new(&self.joints).map_err(|e| {
+        let robot = self.robot().map_err(|e| {
             let line = robot_error_joint(&e)
                 .and_then(|j| self.lines.joints.get(j).copied().flatten())
                 .or(self.lines.robot);
@@ -356,7 +365,8 @@ impl Problem {
     /// Which pairs of links are checked and why the others are skipped
     /// ([`capp_core::self_collision::pairs`]).
     pub fn pair_table(&self) -> Result<PairTable<MAX_JOINTS>, LoadError> {
-        let robot = Robot::<MAX_JOINTS>::new(&self.joints)
+        let robot = self
+            .robot()
             .map_err(|e| self.error(self.lines.robot, format!("robot: {e}")))?;
         let allowed: Vec<(u8, u8)> = self
             .links
@@ -533,7 +543,11 @@ fn robot_error_joint(e: &capp_core::RobotError) -> Option<usize> {
         E::NotFinite { joint, .. }
         | E::InvertedLimits { joint }
         | E::NonPositiveRate { joint }
-        | E::WeightOutOfRange { joint } => Some(joint as usize),
+        | E::WeightOutOfRange { joint }
+        | E::NotRotation { joint }
+        | E::ZeroAxis { joint }
+        | E::MixedJoints { joint }
+        | E::OutOfRange { joint, .. } => Some(joint as usize),
         _ => None,
     }
 }

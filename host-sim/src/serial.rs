@@ -176,6 +176,9 @@ pub enum SerialError {
     },
     /// The plan was stopped (by another host) before it ended.
     Stopped,
+    /// The robot has general (URDF) joints or a tool, which the serial
+    /// protocol does not carry yet: plan it with `capp run`.
+    GeneralJoints,
 }
 
 impl fmt::Display for SerialError {
@@ -187,6 +190,10 @@ impl fmt::Display for SerialError {
                 "the board speaks protocol version {board}, this host {host}: flash matching firmware"
             ),
             SerialError::Stopped => write!(f, "the plan was stopped before it ended"),
+            SerialError::GeneralJoints => write!(
+                f,
+                "the serial protocol carries DH rows only: a URDF robot (general joints, a tool) cannot be uploaded yet; plan it with `capp run`"
+            ),
         }
     }
 }
@@ -210,6 +217,9 @@ pub fn plan_on_board<T: Read + Write>(
     idle: Duration,
     watch: impl FnMut(&Status),
 ) -> Result<(RunResult, LinkReport), SerialError> {
+    if problem.joints.iter().any(|j| j.origin.is_some()) || !problem.tool.is_identity() {
+        return Err(SerialError::GeneralJoints);
+    }
     let protocol = link.ping(0x0CA9_9000)?;
     if protocol != capp_proto::VERSION {
         return Err(SerialError::Version {

@@ -5,6 +5,7 @@
 //! |---|---|
 //! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
 //! | [`legacy`] | CAPP.c's `input.dat` (and writes its `joints.dat` records) |
+//! | [`urdf`] | a scenario's `[robot] urdf = "..."`: a URDF robot as general joints |
 //!
 //! [`Problem::load`] picks the reader by the file's extension ([`is_toml`])
 //! and validates what it read. The types both readers produce ([`Problem`],
@@ -13,6 +14,7 @@
 
 pub mod legacy;
 pub mod scenario_file;
+pub mod urdf;
 
 use std::path::Path;
 

@@ -76,6 +76,19 @@ enum LengthUnit {
 struct RobotSpec {
     preset: Option<String>,
     joints: Option<Vec<Spanned<JointSpec>>>,
+    /// A URDF file, relative to the scenario file.
+    urdf: Option<String>,
+    /// The URDF chain's base link (default: the tree's root).
+    base_link: Option<String>,
+    /// The URDF chain's tip link (default: the only leaf below the base
+    /// reached through moving joints).
+    tip_link: Option<String>,
+    /// `package://NAME/...` roots, relative to the scenario file.
+    #[serde(default)]
+    packages: std::collections::BTreeMap<String, String>,
+    /// Directories holding ROS packages, relative to the scenario file.
+    #[serde(default)]
+    package_dirs: Vec<String>,
     #[serde(default)]
     overrides: Vec<Spanned<OverrideSpec>>,
     /// Capsule radius of every link without its own `radius`, length units.
@@ -146,7 +159,8 @@ fn one() -> f64 {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct OverrideSpec {
-    joint: usize,
+    /// By number (1 to n) or by name.
+    joint: LinkRef,
     min: Option<f64>,
     max: Option<f64>,
     max_rate: Option<f64>,
@@ -303,17 +317,72 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             _ => Ok(()),
         }
     };
+    let given = [
+        robot.preset.is_some(),
+        robot.joints.is_some(),
+        robot.urdf.is_some(),
+    ];
+    match given.iter().filter(|&&g| g).count() {
+        0 => {
+            return Err(err(
+                robot_line,
+                "robot: missing `preset`, `joints` (a DH table) or `urdf` (a URDF file)".into(),
+            ))
+        }
+        1 => {}
+        _ => {
+            return Err(err(
+                robot_line,
+                "robot: give one of `preset`, `joints` and `urdf`".into(),
+            ))
+        }
+    }
+    if robot.urdf.is_none()
+        && (robot.base_link.is_some()
+            || robot.tip_link.is_some()
+            || !robot.packages.is_empty()
+            || !robot.package_dirs.is_empty())
+    {
+        return Err(err(
+            robot_line,
+            "robot: `base_link`, `tip_link`, `packages` and `package_dirs` go with `urdf`".into(),
+        ));
+    }
+    let mut tool = capp_core::robot::Placement::IDENTITY;
+    let mut from_urdf = false;
     let (mut joints, mut names, mut joint_lines, mut home) = match (&robot.preset, robot.joints) {
+        (None, None) => {
+            let file = robot.urdf.as_deref().unwrap_or_default();
+            let here = path.parent().unwrap_or(Path::new("."));
+            let options = capp_urdf::LoadOptions {
+                base_link: robot.base_link.clone(),
+                tip_link: robot.tip_link.clone(),
+                packages: robot
+                    .packages
+                    .iter()
+                    .map(|(name, dir)| (name.clone(), here.join(dir)))
+                    .collect(),
+                package_dirs: robot.package_dirs.iter().map(|d| here.join(d)).collect(),
+                capsules_per_mesh: capp_urdf::CapsuleCount::Auto,
+            };
+            let imported = super::urdf::import(&here.join(file), &options, per_inch / INCH_M)
+                .map_err(|e| err(robot_line, format!("robot.urdf: {e}")))?;
+            let n = imported.joints.len();
+            radii = imported.radii;
+            drive_given = vec![[None; 2]; n];
+            tool = imported.tool;
+            from_urdf = true;
+            (
+                imported.joints,
+                imported.names,
+                vec![Some(robot_line); n],
+                imported.home,
+            )
+        }
         (Some(_), Some(_)) => {
             return Err(err(
                 robot_line,
-                "robot: give either `preset` or `joints`, not both".into(),
-            ))
-        }
-        (None, None) => {
-            return Err(err(
-                robot_line,
-                "robot: missing `preset` or `joints` (a DH table)".into(),
+                "robot: give one of `preset`, `joints` and `urdf`".into(),
             ))
         }
         (Some(preset), None) => {
@@ -408,17 +477,28 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     for o in robot.overrides {
         let line = at(o.span());
         let o = o.into_inner();
-        if o.joint == 0 || o.joint > joints.len() {
-            return Err(err(
-                line,
-                format!(
-                    "robot override: joint {} does not exist (joints are numbered 1 to {})",
-                    o.joint,
-                    joints.len()
-                ),
-            ));
-        }
-        let j = &mut joints[o.joint - 1];
+        let index = match &o.joint {
+            LinkRef::Number(i) if *i >= 1 && (*i as usize) <= joints.len() => *i as usize,
+            LinkRef::Number(i) => {
+                return Err(err(
+                    line,
+                    format!(
+                        "robot override: joint {i} does not exist (joints are numbered 1 to {})",
+                        joints.len()
+                    ),
+                ))
+            }
+            LinkRef::Name(name) => match names.iter().position(|n| n == name) {
+                Some(k) => k + 1,
+                None => {
+                    return Err(err(
+                        line,
+                        format!("robot override: no joint is named \"{name}\""),
+                    ))
+                }
+            },
+        };
+        let j = &mut joints[index - 1];
         let unit = match j.kind {
             JointKind::Revolute => angle,
             JointKind::Prismatic => 1.0,
@@ -434,15 +514,15 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         }
         positive(
             line,
-            format!("robot override of joint {}: max_accel", o.joint),
+            format!("robot override of joint {index}: max_accel"),
             o.max_accel,
         )?;
         positive(
             line,
-            format!("robot override of joint {}: max_jerk", o.joint),
+            format!("robot override of joint {index}: max_jerk"),
             o.max_jerk,
         )?;
-        let given = &mut drive_given[o.joint - 1];
+        let given = &mut drive_given[index - 1];
         if let Some(v) = o.max_accel {
             given[0] = Some(v * unit);
         }
@@ -453,9 +533,26 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             j.weight = v as f32;
         }
         if let Some(v) = o.radius {
-            radii[o.joint - 1] = Some(v as f32);
+            radii[index - 1] = Some(v as f32);
         }
-        joint_lines[o.joint - 1] = Some(line);
+        joint_lines[index - 1] = Some(line);
+    }
+    if from_urdf {
+        for (k, joint) in joints.iter().enumerate() {
+            let missing = super::urdf::missing_fields(joint);
+            if !missing.is_empty() {
+                return Err(err(
+                    joint_lines[k].unwrap_or(robot_line),
+                    format!(
+                        "robot: joint {} (\"{}\"): the URDF gives no {}; give {} in a [[robot.overrides]] entry",
+                        k + 1,
+                        names[k],
+                        missing.join(", "),
+                        missing.join(" and "),
+                    ),
+                ));
+            }
+        }
     }
     if names.iter().all(|n| n.is_empty()) {
         names.clear();
@@ -694,7 +791,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let settings_line = file.settings.as_ref().map(|s| at(s.span()));
     let s = file.settings.map(|s| s.into_inner()).unwrap_or_default();
     let f = |v: Option<f64>, d: f32| v.map_or(d, |x| x as f32);
-    let mut settings = match (s.characteristic_length, Robot::<MAX_JOINTS>::new(&joints)) {
+    let mut settings = match (s.characteristic_length, Robot::<MAX_JOINTS>::new_with_tool(&joints, &tool)) {
         (Some(length), _) if length.is_finite() && length > 0.0 => {
             Settings::relative_to(length as f32)
         }
@@ -826,7 +923,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     });
     // A joint goal's waypoint is its configuration's pose (the core's own
     // kinematics, as the planner will compute it), for reports and pictures.
-    if let Ok(robot) = Robot::<MAX_JOINTS>::new(&joints) {
+    if let Ok(robot) = Robot::<MAX_JOINTS>::new_with_tool(&joints, &tool) {
         let mut frames = capp_core::kinematics::Frames::<MAX_JOINTS>::default();
         for (w, q) in &joint_goals {
             if q.len() == joints.len() {
@@ -850,6 +947,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         kind: SourceKind::Toml,
         length_unit: length_unit.into(),
         joints,
+        tool,
         joint_names: names,
         obstacles,
         obstacle_names,

@@ -1,0 +1,149 @@
+//! `[robot] urdf = "..."`: a robot from a URDF file, through `capp-urdf`,
+//! as the core's general joints ([`capp_core::robot::origin`]).
+//!
+//! - Each moving joint between `base_link` and `tip_link` becomes a general
+//!   joint: its `<origin>` (fixed joints before it folded in) and `<axis>`;
+//!   the fixed joints after the last one become the robot's tool.
+//! - Lengths: URDF is in metres; they are converted to the scenario's length
+//!   unit. Angles are radians whatever `[units] angle` says (the unit applies
+//!   to what the scenario file itself writes: overrides, starts, Euler angles).
+//! - Limits: `<limit lower upper>`; a continuous joint (or a revolute one
+//!   URDF 1.2 leaves unlimited) gets [`CONTINUOUS_RANGE_RAD`] each way: the
+//!   planner does not wrap angles. A prismatic joint without finite limits,
+//!   or any joint without a `<limit velocity>`, must be completed by a
+//!   `[[robot.overrides]]` entry ([`missing_fields`] names what is missing).
+//! - Self-collision: each link's `<collision>` geometry (primitives, or STL,
+//!   OBJ, Collada meshes fitted with capsules by `capp-urdf`) is enclosed in
+//!   one capsule around the link's chord, the segment the core checks
+//!   ([`enclosing_radius`]). The base's own geometry is not checked: the
+//!   core has no link before the first joint.
+
+use std::path::Path;
+
+use capp_core::robot::{JointOrigin, Placement};
+use capp_core::{Joint, JointKind};
+use capp_urdf::{Body, Chain, LoadOptions, UrdfError};
+use nalgebra::{Isometry3, Point3, Vector3};
+
+/// A continuous joint's range each way from zero, radians: one turn.
+pub const CONTINUOUS_RANGE_RAD: f64 = 2.0 * std::f64::consts::PI;
+
+/// A robot read from a URDF file, in the scenario's length unit.
+pub struct UrdfRobot {
+    /// The chain as `capp-urdf` read it (metres).
+    pub chain: Chain,
+    /// One general joint per moving joint. A value the URDF does not give
+    /// (see [`missing_fields`]) is NaN until an override sets it.
+    pub joints: Vec<Joint>,
+    /// The URDF joint names.
+    pub names: Vec<String>,
+    /// The tip link's frame in the last moving joint's.
+    pub tool: Placement,
+    /// The capsule radius enclosing each link's collision geometry, length
+    /// units; `None` for a link with none.
+    pub radii: Vec<Option<f32>>,
+    /// The home configuration: every joint at zero, or mid-range where zero
+    /// is outside its limits.
+    pub home: Vec<f32>,
+}
+
+/// Reads `path` with `options` and converts it, lengths times `per_metre`
+/// (the scenario's length units per metre).
+pub fn import(path: &Path, options: &LoadOptions, per_metre: f64) -> Result<UrdfRobot, UrdfError> {
+    let chain = capp_urdf::load(path, options)?;
+    let n = chain.joints.len();
+    let mut joints = Vec::with_capacity(n);
+    let mut home = Vec::with_capacity(n);
+    for j in &chain.joints {
+        let (kind, unit) = match j.kind {
+            capp_urdf::JointKind::Revolute | capp_urdf::JointKind::Continuous => {
+                (JointKind::Revolute, 1.0)
+            }
+            capp_urdf::JointKind::Prismatic => (JointKind::Prismatic, per_metre),
+        };
+        let limit = |v: f64, side: f64| match (v.is_finite(), kind) {
+            (true, _) => v * unit,
+            (false, JointKind::Revolute) => side * CONTINUOUS_RANGE_RAD,
+            (false, JointKind::Prismatic) => f64::NAN,
+        };
+        let (min, max) = match j.kind {
+            capp_urdf::JointKind::Continuous => (-CONTINUOUS_RANGE_RAD, CONTINUOUS_RANGE_RAD),
+            _ => (limit(j.lower, -1.0), limit(j.upper, 1.0)),
+        };
+        let rate = j.velocity.map_or(f64::NAN, |v| v * unit);
+        let a = j.axis.into_inner();
+        let origin = JointOrigin {
+            placement: placement(&j.origin, per_metre),
+            axis: [a.x as f32, a.y as f32, a.z as f32],
+        };
+        joints.push(Joint::general(kind, origin, min as f32, max as f32, rate as f32));
+        home.push(if min <= 0.0 && 0.0 <= max {
+            0.0
+        } else {
+            (0.5 * (min + max)) as f32
+        });
+    }
+    // Link k's chord, in joint k's frame: from its origin to the next
+    // joint's (or to the tool's).
+    let radii = (0..n)
+        .map(|k| {
+            let end = match chain.joints.get(k + 1) {
+                Some(next) => next.origin.translation.vector,
+                None => chain.tool.translation.vector,
+            };
+            chain
+                .bodies
+                .get(k + 1)
+                .and_then(|body| enclosing_radius(body, &end))
+                .map(|r| (r * per_metre) as f32)
+        })
+        .collect();
+    Ok(UrdfRobot {
+        names: chain.joints.iter().map(|j| j.name.clone()).collect(),
+        tool: placement(&chain.tool, per_metre),
+        joints,
+        radii,
+        home,
+        chain,
+    })
+}
+
+/// A rigid transform in `f32`, its translation times `per_metre`.
+fn placement(iso: &Isometry3<f64>, per_metre: f64) -> Placement {
+    let r = iso.rotation.to_rotation_matrix();
+    let t = iso.translation.vector * per_metre;
+    Placement {
+        rotation: [0, 1, 2].map(|i| [0, 1, 2].map(|k| r[(i, k)] as f32)),
+        translation: [t.x as f32, t.y as f32, t.z as f32],
+    }
+}
+
+/// The smallest radius of a capsule around the segment from the body's
+/// origin to `end` that holds every capsule of `body` (metres); `None` if
+/// the body has no collision geometry. The distance to a segment is convex,
+/// so a capsule's farthest point from the chord is at one of its ends.
+pub fn enclosing_radius(body: &Body, end: &Vector3<f64>) -> Option<f64> {
+    let chord = capp_urdf::Capsule {
+        a: Point3::origin(),
+        b: Point3::from(*end),
+        radius: 0.0,
+    };
+    body.capsules
+        .iter()
+        .map(|c| chord.segment_distance(&c.a).max(chord.segment_distance(&c.b)) + c.radius)
+        .reduce(f64::max)
+}
+
+/// What a URDF joint still lacks after the overrides: `"min"`, `"max"`,
+/// `"max_rate"` (NaN placeholders from [`import`]).
+pub fn missing_fields(joint: &Joint) -> Vec<&'static str> {
+    [
+        (joint.min, "min"),
+        (joint.max, "max"),
+        (joint.max_rate, "max_rate"),
+    ]
+    .into_iter()
+    .filter(|(v, _)| v.is_nan())
+    .map(|(_, name)| name)
+    .collect()
+}
