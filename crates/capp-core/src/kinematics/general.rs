@@ -16,6 +16,10 @@ use crate::robot::{JointKind, Robot};
 /// Every pivot and axis of `robot`'s general joints at `q` into `frames`
 /// (the last link's end is the last joint's moved origin, before the tool);
 /// returns the last joint's moved origin and rotation.
+///
+/// Never inlined: the forward pass is called from a dozen places, and a
+/// DH robot (the board's) must not carry a copy of this one in each.
+#[inline(never)]
 pub(super) fn forward<const N: usize>(
     robot: &Robot<N>,
     q: &[f32],

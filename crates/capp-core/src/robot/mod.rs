@@ -22,7 +22,7 @@
 
 pub mod origin;
 
-use crate::math::{all_finite, Mat3};
+use crate::math::{all_finite, Mat3, Vec3};
 pub use origin::{JointOrigin, Placement};
 use origin::{PlacementFault, Transform};
 
@@ -308,7 +308,7 @@ impl core::fmt::Display for RobotError {
 }
 
 /// Per-joint constants derived once at validation, used by forward kinematics.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct LinkConstants {
     pub(crate) cos_alpha: f32,
     pub(crate) sin_alpha: f32,
@@ -326,6 +326,25 @@ pub(crate) struct LinkConstants {
     /// configuration, on the distance between any two points of the arm up to
     /// this link (length units).
     pub(crate) chain: f32,
+}
+
+/// All zeros (the origin's rotation too: it is read only for a general
+/// joint, which sets it), so that clearing `N` of them is one `memset`.
+impl Default for LinkConstants {
+    fn default() -> Self {
+        LinkConstants {
+            cos_alpha: 0.0,
+            sin_alpha: 0.0,
+            cos_theta: 0.0,
+            sin_theta: 0.0,
+            origin: Transform {
+                rotation: Mat3::zeros(),
+                translation: Vec3::zeros(),
+            },
+            longest: 0.0,
+            chain: 0.0,
+        }
+    }
 }
 
 /// A validated serial chain of at most `N` joints. Immutable once built.
@@ -540,21 +559,24 @@ impl<const N: usize> Robot<N> {
             translation: previous_align.transpose() * placed_tool.translation,
         };
         *tool_out = *tool;
-        *has_tool = *tool_transform != Transform::default();
+        // A general chain always ends with its tool (at least `A_{n-1}^T`).
+        *has_tool = is_general || !tool.is_identity();
         *general = is_general;
         // A general link's chord ends at the next joint's pivot (or the
         // tool): its length is that placement's translation (plus the
         // travel of a prismatic joint, added above).
+        // (Indexed with `get`: no panic path.)
         let n = out.len();
-        let next_offsets: [f32; N] = core::array::from_fn(|k| {
-            if k + 1 < n {
-                crate::math::norm(&links[k + 1].origin.translation)
-            } else {
-                crate::math::norm(&tool_transform.translation)
-            }
-        });
+        let tool_offset = crate::math::norm(&tool_transform.translation);
         let mut chain = 0.0f32;
-        for (k, (link, offset)) in links.iter_mut().zip(next_offsets).take(n).enumerate() {
+        for k in 0..n {
+            let offset = match links.get(k + 1) {
+                Some(next) if k + 1 < n => crate::math::norm(&next.origin.translation),
+                _ => tool_offset,
+            };
+            let Some(link) = links.get_mut(k) else {
+                break;
+            };
             // A DH chain's links are complete but for a tool, which extends
             // the last one.
             if is_general || (*has_tool && k + 1 == n) {

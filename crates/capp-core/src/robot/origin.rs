@@ -141,7 +141,9 @@ pub(crate) fn unit_axis(axis: &[f32; 3]) -> Result<Vec3, PlacementFault> {
         return Err(PlacementFault::NotFinite);
     }
     // Scaled by the largest entry first, so that no square overflows.
-    let largest = axis.iter().fold(0.0f32, |m, x| crate::math::max(m, x.abs()));
+    let largest = axis
+        .iter()
+        .fold(0.0f32, |m, x| crate::math::max(m, x.abs()));
     if largest < MIN_AXIS_LENGTH / 2.0 {
         return Err(PlacementFault::ZeroAxis);
     }
