@@ -144,6 +144,53 @@ pub fn scenario_copy_name(problem: &Problem) -> &'static str {
     }
 }
 
+/// Copies the scenario into an output folder. A TOML scenario's paths
+/// (`[robot] urdf`, `packages`, `package_dirs`, relative to the scenario
+/// file) are made absolute in the copy, comments and all else kept, so that
+/// `capp check` and `capp render` load the copy where it is.
+fn copy_scenario(problem: &Problem, to: &Path) -> Result<()> {
+    let source = &problem.source;
+    let text =
+        fs::read_to_string(source).with_context(|| format!("cannot read {}", source.display()))?;
+    let mut text = text;
+    let from_urdf = problem.joints.first().is_some_and(|j| j.origin.is_some());
+    if problem.kind == SourceKind::Toml && from_urdf {
+        let mut doc: toml_edit::DocumentMut = text
+            .parse()
+            .with_context(|| format!("cannot re-read {}", source.display()))?;
+        let here = source.parent().unwrap_or(Path::new("."));
+        let absolute = |v: &mut toml_edit::Value| {
+            if let Some(rel) = v.as_str() {
+                let path = here.join(rel);
+                let path = fs::canonicalize(&path).unwrap_or(path);
+                let decor = v.decor().clone();
+                *v = toml_edit::Value::from(path.display().to_string());
+                *v.decor_mut() = decor;
+            }
+        };
+        if let Some(robot) = doc.get_mut("robot").and_then(|r| r.as_table_like_mut()) {
+            if let Some(v) = robot.get_mut("urdf").and_then(|v| v.as_value_mut()) {
+                absolute(v);
+            }
+            if let Some(t) = robot.get_mut("packages").and_then(|v| v.as_table_like_mut()) {
+                for (_, v) in t.iter_mut() {
+                    if let Some(v) = v.as_value_mut() {
+                        absolute(v);
+                    }
+                }
+            }
+            if let Some(a) = robot
+                .get_mut("package_dirs")
+                .and_then(|v| v.as_array_mut())
+            {
+                a.iter_mut().for_each(absolute);
+            }
+        }
+        text = doc.to_string();
+    }
+    fs::write(to, text).with_context(|| format!("cannot write {}", to.display()))
+}
+
 /// Finds the scenario copy in an output folder.
 pub fn find_scenario_copy(dir: &Path) -> Option<PathBuf> {
     ["scenario.toml", "input.dat"]
@@ -197,8 +244,7 @@ pub fn write_run(
         )?;
         fs::write(staging.join("joints.dat"), joints_dat(result.setpoints()))?;
         fs::write(staging.join("summary.txt"), summary.to_string())?;
-        fs::copy(&problem.source, staging.join(scenario_copy_name(problem)))
-            .with_context(|| format!("cannot copy {}", problem.source.display()))?;
+        copy_scenario(problem, &staging.join(scenario_copy_name(problem)))?;
         extra(&staging)?;
         let mut marker = String::new();
         let _ = writeln!(marker, "{}", outcome_name(result.outcome));
