@@ -172,17 +172,17 @@ fn copy_scenario(problem: &Problem, to: &Path) -> Result<()> {
             if let Some(v) = robot.get_mut("urdf").and_then(|v| v.as_value_mut()) {
                 absolute(v);
             }
-            if let Some(t) = robot.get_mut("packages").and_then(|v| v.as_table_like_mut()) {
+            if let Some(t) = robot
+                .get_mut("packages")
+                .and_then(|v| v.as_table_like_mut())
+            {
                 for (_, v) in t.iter_mut() {
                     if let Some(v) = v.as_value_mut() {
                         absolute(v);
                     }
                 }
             }
-            if let Some(a) = robot
-                .get_mut("package_dirs")
-                .and_then(|v| v.as_array_mut())
-            {
+            if let Some(a) = robot.get_mut("package_dirs").and_then(|v| v.as_array_mut()) {
                 a.iter_mut().for_each(absolute);
             }
         }
