@@ -79,6 +79,13 @@ enum Command {
         #[arg(long, default_value_t = 20.0)]
         idle_timeout: f64,
     },
+    /// Print the robot as the planner sees it: the chain (DH rows, or a
+    /// URDF's joints with origins, axes and the tool), limits, rates, and
+    /// each link's capsule with the collision geometry it encloses.
+    Robot {
+        /// Scenario file: `*.toml`, anything else is read as input.dat.
+        scenario: PathBuf,
+    },
     /// Print the link capsules and the pairs of links checked for
     /// self-collision, and why each other pair is skipped.
     Acm {
@@ -167,6 +174,7 @@ where
         ),
         Command::Render { dir, scenario } => render_cmd(&dir, scenario.as_deref()),
         Command::Acm { scenario } => acm_cmd(&scenario),
+        Command::Robot { scenario } => robot_cmd(&scenario),
     };
     match result {
         Ok(code) => code,
@@ -347,6 +355,12 @@ fn check_cmd(path: &Path, scenario: Option<&Path>) -> Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
+}
+
+fn robot_cmd(path: &Path) -> Result<ExitCode> {
+    let problem = Problem::load(path)?;
+    say(&crate::robot_report::report(&problem)?);
+    Ok(ExitCode::SUCCESS)
 }
 
 fn acm_cmd(path: &Path) -> Result<ExitCode> {

@@ -40,6 +40,7 @@ pub mod output;
 pub mod plan;
 pub mod problem;
 pub mod render;
+pub mod robot_report;
 pub mod serial;
 pub mod trajectory;
 

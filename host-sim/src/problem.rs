@@ -110,6 +110,23 @@ pub struct LinkGeometry {
     pub home: Vec<f32>,
 }
 
+/// A URDF robot's file, chain ends and collision geometry, for reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfSource {
+    /// The URDF file.
+    pub file: PathBuf,
+    /// `<robot name>`.
+    pub robot_name: String,
+    /// The chain's base link.
+    pub base_link: String,
+    /// The chain's tip link.
+    pub tip_link: String,
+    /// Per rigid body, metres: `bodies[0]` on the base, `bodies[k + 1]`
+    /// moved by joint `k`, each with its links and fitted capsules in its
+    /// own frame.
+    pub bodies: Vec<capp_urdf::Body>,
+}
+
 /// Seed of the sampled configurations of the allowed-collision matrix.
 pub const PAIR_SEED: u32 = 1;
 
@@ -199,6 +216,9 @@ pub struct Problem {
     /// The end effector's frame in the last joint's (a URDF robot's fixed
     /// joints after its last moving one); the identity for a DH table.
     pub tool: Placement,
+    /// Where a URDF robot came from, with its collision geometry; `None`
+    /// for a DH table or the preset.
+    pub urdf: Option<UrdfSource>,
     /// Joint names (for messages and plots).
     pub joint_names: Vec<String>,
     /// The obstacles.

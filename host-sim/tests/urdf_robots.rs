@@ -315,3 +315,43 @@ fn malformed_urdfs_stop_capp_run_with_one_line_and_no_output() {
     }
     assert!(refused >= 12, "{refused} malformed URDFs tried");
 }
+
+#[test]
+fn capp_robot_prints_the_chain_limits_and_capsules() {
+    let o = Command::new(env!("CARGO_BIN_EXE_capp"))
+        .args(["robot", scenario("ur5_table.toml").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    // The URDF's numbers, read back: shoulder_lift's origin and elbow's limits.
+    assert!(text.contains("robot \"ur5\""), "{text}");
+    assert!(
+        text.contains("base_link -> tool0: 6 moving joints"),
+        "{text}"
+    );
+    assert!(
+        text.contains("origin xyz 0.0000 0.1358 0.0000  rpy 0.0000 1.5708"),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "elbow_joint            revolute   limits [-3.1416, 3.1416]  max_rate 3.15 rad/s"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("tool (the tip's frame in the last joint's): xyz 0.0000 0.0823 0.0000"),
+        "{text}"
+    );
+    assert!(text.contains("URDF links forearm_link:"), "{text}");
+    assert!(text.contains("base (base_link, base):"), "{text}");
+    // A DH robot prints its table.
+    let o = Command::new(env!("CARGO_BIN_EXE_capp"))
+        .args(["robot", scenario("planar_arm.toml").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("3 joints (DH rows"), "{text}");
+    assert!(text.contains("DH alpha 0.0000  a 0.5000"), "{text}");
+}

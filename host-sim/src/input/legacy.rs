@@ -306,6 +306,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let drive = crate::problem::DriveLimits::defaults(&joints);
     Ok(Problem {
         tool: capp_core::robot::Placement::IDENTITY,
+        urdf: None,
         joint_goals: Vec::new(),
         name,
         description: String::new(),

@@ -350,6 +350,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     }
     let mut tool = capp_core::robot::Placement::IDENTITY;
     let mut from_urdf = false;
+    let mut urdf_source = None;
     let (mut joints, mut names, mut joint_lines, mut home) = match (&robot.preset, robot.joints) {
         (None, None) => {
             let file = robot.urdf.as_deref().unwrap_or_default();
@@ -372,6 +373,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             drive_given = vec![[None; 2]; n];
             tool = imported.tool;
             from_urdf = true;
+            urdf_source = Some(crate::problem::UrdfSource {
+                file: here.join(file),
+                robot_name: imported.chain.robot_name.clone(),
+                base_link: imported.chain.base_link.clone(),
+                tip_link: imported.chain.tip_link.clone(),
+                bodies: imported.chain.bodies.clone(),
+            });
             (
                 imported.joints,
                 imported.names,
@@ -951,6 +959,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         length_unit: length_unit.into(),
         joints,
         tool,
+        urdf: urdf_source,
         joint_names: names,
         obstacles,
         obstacle_names,
