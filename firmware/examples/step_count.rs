@@ -393,6 +393,11 @@ fn main() -> ! {
     if let Ok(scene) = scenes::pips_without_self_collision(8) {
         measure("pips_self_off", &scene, overhead, false, 0);
     }
+    // What general (URDF) joints cost (issue 23): the same PIPS + 8 step,
+    // the arm written as general joints.
+    if let Ok(scene) = scenes::pips_general(8) {
+        measure("pips_general", &scene, overhead, false, 0);
+    }
     // What the tracker costs (issue 22): the same PIPS + 8, a tracked tick.
     if let Ok(scene) = scenes::pips_tracked(8) {
         measure("pips_tracked", &scene, overhead, true, 0);

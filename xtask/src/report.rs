@@ -366,6 +366,19 @@ pub fn tables(
         opt(counts.get("pips_self_off", 18, 8, "step"), grouped),
     );
     let _ = writeln!(w);
+    let general = counts.get("pips_general", 18, 8, "step");
+    let dh = counts.get("pips", 18, 8, "step");
+    let _ = writeln!(
+        w,
+        "General (URDF) joints (issue 23): the same PIPS + 8 step with the arm written as general joints (`capp_core::robot::general_from_dh`: a fixed transform, then a turn about z): {} against {} for its DH rows, {} (target: at most 3 % above).",
+        opt(general, grouped),
+        opt(dh, grouped),
+        match (general, dh) {
+            (Some(g), Some(d)) if d > 0.0 => format!("{:+.1} %", 100.0 * (g / d - 1.0)),
+            _ => "-".into(),
+        },
+    );
+    let _ = writeln!(w);
     let _ = writeln!(w, "Every step of the two shipped dead ends, timed one at a time and grouped by what the escape was doing after it (`pips_escape.toml`: a detour round the box, then reached; `pips_dead_end.toml`: no path, so detours and walks until the 64 attempts are spent, the return to the best configuration, `Stalled`). A step's cost is set by its halvings (each one evaluates the arm again; at most `max_halvings` = 8), not by the escape; the steps that start an escape add `Escape::on_stall`, timed alone in the last column from the scene's warmed-up state.");
     let _ = writeln!(w);
     let _ = writeln!(w, "| scenario | obstacles | steps | law alone: mean / max | detour: mean / max | walk: mean / max | search slice: mean / max | searched path: mean / max | return: mean / max | steps that start an escape: count, mean / max | `on_stall` alone: detour / walk |");

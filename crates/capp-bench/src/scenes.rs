@@ -284,7 +284,27 @@ pub fn pips_with_law(obstacles: usize, kind: LawKind) -> Result<Scene<PIPS_JOINT
     pips_with(obstacles, s, true)
 }
 
+/// [`pips`] with the arm written as general joints
+/// ([`capp_core::robot::general_from_dh`]): what a URDF robot's forward
+/// pass costs against the DH one, on the same arm and obstacles.
+pub fn pips_general(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let mut joints = pips::joints();
+    let tool = capp_core::robot::general_from_dh(&pips::joints(), &mut joints);
+    let robot = Robot::new_with_tool(&joints, &tool).map_err(ScenarioError::Robot)?;
+    pips_robot(robot, obstacles, settings(), true)
+}
+
 fn pips_with(
+    obstacles: usize,
+    settings: Settings,
+    self_collision: bool,
+) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
+    pips_robot(robot, obstacles, settings, self_collision)
+}
+
+fn pips_robot(
+    robot: Robot<PIPS_JOINTS>,
     obstacles: usize,
     settings: Settings,
     self_collision: bool,
@@ -292,7 +312,6 @@ fn pips_with(
     if obstacles > MAX_OBSTACLES {
         return Err(SceneError::Size);
     }
-    let robot = pips::robot::<PIPS_JOINTS>().map_err(ScenarioError::Robot)?;
     let start = pips::home();
     let mut frames = Frames::<PIPS_JOINTS>::default();
     forward_kinematics(&robot, &start, &mut frames);

@@ -237,6 +237,11 @@ fn pips_as_general_joints_is_the_same_arm_as_its_dh_table() {
     let (joints, tool) = dh_as_general(&pips::joints());
     let general = Robot::<18>::new_with_tool(&joints, &tool).unwrap();
     assert!(general.is_general() && !dh.is_general());
+    // The core's own conversion (f32) builds the same arm.
+    let mut converted = pips::joints();
+    let core_tool = capp_core::robot::general_from_dh(&pips::joints(), &mut converted);
+    let from_core = Robot::<18>::new_with_tool(&converted, &core_tool).unwrap();
+    let mut c = Frames::<18>::default();
     let mut rng = Rng(5);
     let (mut a, mut b) = (Frames::<18>::default(), Frames::<18>::default());
     for round in 0..200 {
@@ -247,6 +252,9 @@ fn pips_as_general_joints_is_the_same_arm_as_its_dh_table() {
         };
         forward_kinematics(&dh, &q, &mut a);
         forward_kinematics(&general, &q, &mut b);
+        forward_kinematics(&from_core, &q, &mut c);
+        assert!((b.end_position() - c.end_position()).norm() < 1e-3);
+        assert!((b.end_rotation() - c.end_rotation()).norm() < 1e-5);
         for k in 0..18 {
             let (pa, pb) = (a.pivot(k), b.pivot(k));
             let (ea, eb) = (a.link_end(k), b.link_end(k));

@@ -121,6 +121,28 @@ impl Joint {
         }
     }
 
+    /// A DH row's fixed part, the transform after its motion: DH joint `k`
+    /// is `Rot_z(q) [Trans_z(d) Trans_x(a) Rot_x(alpha)]` (revolute) or
+    /// `Trans_z(q) [Rot_z(theta) Trans_x(a) Rot_x(alpha)]` (prismatic), so
+    /// written as general joints, this bracket is the next joint's origin
+    /// (or the tool after the last): see [`general_from_dh`].
+    pub fn dh_fixed_part(&self) -> Placement {
+        let (theta, d) = match self.kind {
+            JointKind::Revolute => (0.0, self.d),
+            JointKind::Prismatic => (self.theta, 0.0),
+        };
+        let (sa, ca) = crate::math::sin_cos(self.alpha);
+        let (st, ct) = crate::math::sin_cos(theta);
+        Placement {
+            rotation: [
+                [ct, -st * ca, st * sa],
+                [st, ct * ca, -ct * sa],
+                [0.0, sa, ca],
+            ],
+            translation: [self.a * ct, self.a * st, d],
+        }
+    }
+
     /// Builder: the same joint with another weight.
     pub fn with_weight(mut self, weight: f32) -> Self {
         self.weight = weight;
@@ -162,6 +184,23 @@ pub enum JointField {
     Origin,
     /// A general joint's axis.
     Axis,
+}
+
+/// The same arm as the DH rows `dh`, as general joints into `out` (as many
+/// as both hold; every axis `z`, the first origin the identity, each next
+/// origin the previous row's [`Joint::dh_fixed_part`]); returns the tool,
+/// the last row's fixed part. Equal to the DH chain to `f32` rounding.
+pub fn general_from_dh(dh: &[Joint], out: &mut [Joint]) -> Placement {
+    let mut previous = Placement::IDENTITY;
+    for (j, o) in dh.iter().zip(out.iter_mut()) {
+        let origin = JointOrigin {
+            placement: previous,
+            axis: [0.0, 0.0, 1.0],
+        };
+        *o = Joint::general(j.kind, origin, j.min, j.max, j.max_rate).with_weight(j.weight);
+        previous = j.dh_fixed_part();
+    }
+    previous
 }
 
 /// The `joint` of a [`RobotError`] about the tool ([`Robot::new_with_tool`]).
