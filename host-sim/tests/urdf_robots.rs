@@ -53,7 +53,7 @@ fn matches_pinocchio(file: &str, csv: &str) {
         let q: Vec<f32> = q64.iter().map(|&x| x as f32).collect();
         forward_kinematics(&robot, &q, &mut frames);
         let (points, end) = forward_chain(&problem.joints, &problem.tool, q64);
-        for k in 0..n {
+        for (k, point) in points.iter().enumerate().take(n) {
             let at = n + 6 * k;
             let pivot = frames.pivot(k);
             let axis = frames.axis(k);
@@ -61,7 +61,7 @@ fn matches_pinocchio(file: &str, csv: &str) {
                 worst_m = worst_m.max((pivot[i] as f64 - row[at + i]).abs());
                 worst_rad = worst_rad.max((axis[i] as f64 - row[at + 3 + i]).abs());
                 assert!(
-                    (points[k][i] - row[at + i]).abs() < 1e-6,
+                    (point[i] - row[at + i]).abs() < 1e-6,
                     "{file} f64 pivot {k}"
                 );
             }
@@ -267,7 +267,7 @@ fn malformed_urdfs_stop_capp_run_with_one_line_and_no_output() {
         ),
         (
             "a mesh that is not there",
-            urdf(&good).replace(
+            urdf(good).replace(
                 "<link name=\"upper\"/>",
                 "<link name=\"upper\"><collision><geometry><mesh filename=\"package://arm/upper.stl\"/></geometry></collision></link>",
             ),
@@ -275,7 +275,7 @@ fn malformed_urdfs_stop_capp_run_with_one_line_and_no_output() {
         ),
         (
             "a negative box size",
-            urdf(&good).replace(
+            urdf(good).replace(
                 "<link name=\"upper\"/>",
                 "<link name=\"upper\"><collision><geometry><box size=\"0.1 -0.1 0.1\"/></geometry></collision></link>",
             ),
