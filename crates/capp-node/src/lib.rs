@@ -78,6 +78,7 @@ extern crate std;
 mod log;
 pub mod rx;
 
+use capp_core::robot::Placement;
 use capp_core::scenario::MAX_JOINT_GOALS;
 use capp_core::setpoint::Decimator;
 use capp_core::{
@@ -123,6 +124,8 @@ struct Draft {
     /// accelerations and jerks, as `Scenario::set_drive_limits` takes them.
     drive_accel: Vec<f32, N>,
     drive_jerk: Vec<f32, N>,
+    /// The tool (the identity until a `Tool` command).
+    tool: Placement,
 }
 
 impl Draft {
@@ -138,6 +141,7 @@ impl Draft {
             capsule_rows: Vec::new(),
             drive_accel: Vec::new(),
             drive_jerk: Vec::new(),
+            tool: Placement::IDENTITY,
         }
     }
 
@@ -154,6 +158,7 @@ impl Draft {
             capsule_rows,
             drive_accel,
             drive_jerk,
+            tool,
         } = self;
         joints.clear();
         obstacles.clear();
@@ -165,6 +170,7 @@ impl Draft {
         capsule_rows.clear();
         drive_accel.clear();
         drive_jerk.clear();
+        *tool = Placement::IDENTITY;
     }
 
     /// No capsules: self-collision off.
@@ -506,6 +512,7 @@ impl<const TXQ: usize> Node<TXQ> {
                     d.start.clear();
                     d.clear_capsules();
                     d.clear_drives();
+                    d.tool = Placement::IDENTITY;
                 }
                 Part::Obstacles => d.obstacles.clear(),
                 Part::Waypoints => {
@@ -519,9 +526,10 @@ impl<const TXQ: usize> Node<TXQ> {
                 let joints = capp_core::pips::joints();
                 d.joints.clear();
                 d.start.clear();
-                // The old robot's capsules and drives do not fit the preset.
+                // The old robot's capsules, drives and tool do not fit the preset.
                 d.clear_capsules();
                 d.clear_drives();
+                d.tool = Placement::IDENTITY;
                 for (j, q) in joints.iter().zip(capp_core::pips::home()) {
                     let _ = d.joints.push(*j);
                     let _ = d.start.push(q);
@@ -532,7 +540,10 @@ impl<const TXQ: usize> Node<TXQ> {
                 let values = [
                     j.alpha, j.a, j.theta, j.d, j.min, j.max, j.max_rate, j.weight,
                 ];
-                append(&mut d.joints, *index, j, finite(&values))?;
+                let ok = finite(&values)
+                    && j.origin
+                        .is_none_or(|o| o.placement.is_finite() && finite(&o.axis));
+                append(&mut d.joints, *index, j, ok)?;
             }
             Command::Obstacle { index, obstacle } => {
                 let o = *obstacle;
@@ -575,6 +586,13 @@ impl<const TXQ: usize> Node<TXQ> {
                 append(&mut d.drive_accel, *index, drive.max_accel, finite)?;
                 // The same length as the accelerations: it cannot be full.
                 let _ = d.drive_jerk.push(drive.max_jerk);
+            }
+            Command::Tool(tool) => {
+                let tool = Placement::from(*tool);
+                if !tool.is_finite() {
+                    return Err((ErrorCode::NotFinite, NO_INDEX));
+                }
+                d.tool = tool;
             }
             Command::Settings(s) => {
                 let s = capp_core::Settings::from(*s);
@@ -628,8 +646,9 @@ impl<const TXQ: usize> Node<TXQ> {
         let d = &self.draft;
         let plan = &mut self.plan;
         plan.scenario
-            .init(
+            .init_with_tool(
                 &d.joints,
+                &d.tool,
                 &d.obstacles,
                 &d.waypoints,
                 d.settings.unwrap_or_default(),
