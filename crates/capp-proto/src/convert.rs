@@ -10,8 +10,7 @@ use capp_core::{JointKind as CoreKind, SuperEllipsoid};
 use capp_core::robot::{JointOrigin, Placement as CorePlacement};
 
 use crate::{
-    EscapeMode, Joint, JointKind, LawKind, Obstacle, Origin, Outcome, Placement, Settings,
-    Waypoint,
+    EscapeMode, Joint, JointKind, LawKind, Obstacle, Origin, Outcome, Placement, Settings, Waypoint,
 };
 
 impl From<CorePlacement> for Placement {

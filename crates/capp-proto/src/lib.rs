@@ -32,7 +32,7 @@ pub use convert::{escape_status, run_command, setpoint_filter};
 pub mod crc;
 pub mod frame;
 
-pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
+pub use frame::{decode, decode_command, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 
 use serde::{Deserialize, Serialize};
 
