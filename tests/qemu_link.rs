@@ -81,6 +81,7 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
     let start = pips::home();
     let upload = Upload {
         joints: &joints,
+        tool: capp_core::robot::Placement::IDENTITY,
         capsule_radius: &[],
         capsule_rows: &[],
         drive: &[],
@@ -267,6 +268,7 @@ fn commands_sent_while_a_plan_runs_are_all_answered() {
     assert!(expected.len() > 1000, "{} steps", expected.len());
     link.upload(&Upload {
         joints: &joints,
+        tool: capp_core::robot::Placement::IDENTITY,
         capsule_radius: &[],
         capsule_rows: &[],
         drive: &[],

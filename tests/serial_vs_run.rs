@@ -246,3 +246,34 @@ fn a_tracked_plan_on_the_board_is_the_host_plan_with_its_drive_state() {
         expected.len() - 1
     );
 }
+
+/// A robot from its URDF on the board (issue 23, protocol 9): the UR5's six
+/// general joints (each joint's origin and axis) and its tool travel in the
+/// upload, with the link capsules fitted to its collision meshes, and the
+/// board's plan round the box on the table is `capp run`'s to the bit.
+#[test]
+fn a_urdf_robot_planned_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let path = scenario("ur5_table.toml");
+    let problem = Problem::load(&path).unwrap();
+    assert!(problem.joints.iter().all(|j| j.origin.is_some()));
+    assert!(
+        !problem.tool.is_identity(),
+        "tool0 is a placement of its own"
+    );
+    let n = serial_matches_run_at(&path, &elf);
+    assert!(n > 5, "{n} setpoints");
+}
+
+/// The Panda from its URDF (seven general joints, a tool) on the board: the
+/// host's plan to the bit.
+#[test]
+fn the_panda_from_its_urdf_planned_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("panda_table.toml", &elf);
+    assert!(n > 5, "{n} setpoints");
+}

@@ -176,9 +176,6 @@ pub enum SerialError {
     },
     /// The plan was stopped (by another host) before it ended.
     Stopped,
-    /// The robot has general (URDF) joints or a tool, which the serial
-    /// protocol does not carry yet: plan it with `capp run`.
-    GeneralJoints,
 }
 
 impl fmt::Display for SerialError {
@@ -190,10 +187,6 @@ impl fmt::Display for SerialError {
                 "the board speaks protocol version {board}, this host {host}: flash matching firmware"
             ),
             SerialError::Stopped => write!(f, "the plan was stopped before it ended"),
-            SerialError::GeneralJoints => write!(
-                f,
-                "the serial protocol carries DH rows only: a URDF robot (general joints, a tool) cannot be uploaded yet; plan it with `capp run`"
-            ),
         }
     }
 }
@@ -217,9 +210,6 @@ pub fn plan_on_board<T: Read + Write>(
     idle: Duration,
     watch: impl FnMut(&Status),
 ) -> Result<(RunResult, LinkReport), SerialError> {
-    if problem.joints.iter().any(|j| j.origin.is_some()) || !problem.tool.is_identity() {
-        return Err(SerialError::GeneralJoints);
-    }
     let protocol = link.ping(0x0CA9_9000)?;
     if protocol != capp_proto::VERSION {
         return Err(SerialError::Version {
@@ -228,7 +218,10 @@ pub fn plan_on_board<T: Read + Write>(
         });
     }
     link.upload(&Upload {
+        // DH rows or general (URDF) joints, and the tool: the board's
+        // robot is the host's (`Robot::new_with_tool`) to the bit.
         joints: &problem.joints,
+        tool: problem.tool,
         capsule_radius: scenario.capsules().radii(),
         capsule_rows: scenario.capsules().checked_rows(),
         // The defaults from the rates need no frames; other limits are

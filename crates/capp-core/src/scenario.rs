@@ -5,7 +5,7 @@ use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{is_rotation, vec3, Mat3};
 use crate::mission::{JointGoalProblem, Mission, MissionError, Settings, Waypoint};
 use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
-use crate::robot::{Joint, Robot, RobotError};
+use crate::robot::{Joint, Placement, Robot, RobotError};
 use crate::self_collision::{CapsuleError, LinkCapsules};
 use crate::target::Target;
 use crate::tracker::limits::{DriveLimitError, DriveLimits};
@@ -141,9 +141,22 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         waypoints: &[Waypoint],
         settings: Settings,
     ) -> Result<(), ScenarioError> {
+        self.init_with_tool(joints, &Placement::IDENTITY, obstacles, waypoints, settings)
+    }
+
+    /// [`Scenario::init`] with a tool: the robot is
+    /// [`Robot::new_with_tool`]'s (`tool` the identity gives `init`'s).
+    pub fn init_with_tool(
+        &mut self,
+        joints: &[Joint],
+        tool: &Placement,
+        obstacles: &[SuperEllipsoid],
+        waypoints: &[Waypoint],
+        settings: Settings,
+    ) -> Result<(), ScenarioError> {
         let result = self
             .robot
-            .init(joints)
+            .init_with_tool(joints, tool)
             .map_err(ScenarioError::from)
             .and_then(|()| {
                 if waypoints.len() > W {

@@ -89,8 +89,12 @@ impl FrameErrors {
 /// A scenario as capp-core values: what the board is to plan.
 #[derive(Clone, Debug)]
 pub struct Upload<'a> {
-    /// The robot's joints.
+    /// The robot's joints: DH rows, or general (URDF) joints with their
+    /// origins and axes.
     pub joints: &'a [capp_core::Joint],
+    /// The tool: the end effector's frame in the last joint's frame (the
+    /// identity: none; sent only when it is not).
+    pub tool: capp_core::robot::Placement,
     /// The link capsules' radii, one per joint, or none: no self-collision
     /// checks (the host's `Scenario::capsules().radii()`, so the board's
     /// scenario is the host's to the bit).
@@ -346,6 +350,9 @@ impl<T: Read + Write> Link<T> {
                 index: i as u8,
                 joint: (*j).into(),
             })?;
+        }
+        if !upload.tool.is_identity() {
+            self.expect_ack(&Command::Tool(upload.tool.into()))?;
         }
         for (i, (&radius, &checked)) in upload
             .capsule_radius

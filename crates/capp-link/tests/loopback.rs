@@ -107,6 +107,7 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
     let waypoints = [target()];
     link.upload(&Upload {
         joints: &joints,
+        tool: capp_core::robot::Placement::IDENTITY,
         capsule_radius: &[],
         capsule_rows: &[],
         drive: &[],

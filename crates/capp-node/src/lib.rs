@@ -78,6 +78,7 @@ extern crate std;
 mod log;
 pub mod rx;
 
+use capp_core::robot::Placement;
 use capp_core::scenario::MAX_JOINT_GOALS;
 use capp_core::setpoint::Decimator;
 use capp_core::{
@@ -85,7 +86,7 @@ use capp_core::{
     SetpointFilter, StartError, SuperEllipsoid,
 };
 use capp_proto::{
-    Command, ErrorCode, EscapeMode, FrameError, Joints, Part, Preset, Reply, State, Status,
+    Command, ErrorCode, EscapeMode, Feed, FrameError, Joints, Part, Preset, Reply, State, Status,
     MAX_FRAME, MAX_JOINTS as N, MAX_OBSTACLES as M, MAX_WAYPOINTS as W, NO_COMMAND, NO_INDEX,
 };
 use embedded_hal_nb::{nb, serial};
@@ -123,6 +124,8 @@ struct Draft {
     /// accelerations and jerks, as `Scenario::set_drive_limits` takes them.
     drive_accel: Vec<f32, N>,
     drive_jerk: Vec<f32, N>,
+    /// The tool (the identity until a `Tool` command).
+    tool: Placement,
 }
 
 impl Draft {
@@ -138,6 +141,7 @@ impl Draft {
             capsule_rows: Vec::new(),
             drive_accel: Vec::new(),
             drive_jerk: Vec::new(),
+            tool: Placement::IDENTITY,
         }
     }
 
@@ -154,6 +158,7 @@ impl Draft {
             capsule_rows,
             drive_accel,
             drive_jerk,
+            tool,
         } = self;
         joints.clear();
         obstacles.clear();
@@ -165,6 +170,7 @@ impl Draft {
         capsule_rows.clear();
         drive_accel.clear();
         drive_jerk.clear();
+        *tool = Placement::IDENTITY;
     }
 
     /// No capsules: self-collision off.
@@ -177,6 +183,122 @@ impl Draft {
     fn clear_drives(&mut self) {
         self.drive_accel.clear();
         self.drive_jerk.clear();
+    }
+
+    /// A command that changes the load (`Clear`, `Preset`, `Joint`, ...,
+    /// `Start`); the others change nothing here. Not generic (unlike
+    /// [`Node`]): compiled once, with capp-node's optimisation level (the
+    /// firmware builds this cold code for size).
+    #[inline(never)]
+    fn load(&mut self, command: &Command) -> Result<(), Refusal> {
+        let d = self;
+        match command {
+            Command::Clear(part) => match part {
+                // In place: a draft is 6 KiB, too big for a temporary on
+                // the serving loop's stack.
+                Part::All => d.clear(),
+                Part::Robot => {
+                    d.joints.clear();
+                    d.start.clear();
+                    d.clear_capsules();
+                    d.clear_drives();
+                    d.tool = Placement::IDENTITY;
+                }
+                Part::Obstacles => d.obstacles.clear(),
+                Part::Waypoints => {
+                    d.waypoints.clear();
+                    d.joint_goals.clear();
+                }
+                Part::Capsules => d.clear_capsules(),
+                Part::Drives => d.clear_drives(),
+            },
+            Command::Preset(Preset::Pips) => {
+                let joints = capp_core::pips::joints();
+                d.joints.clear();
+                d.start.clear();
+                // The old robot's capsules, drives and tool do not fit the preset.
+                d.clear_capsules();
+                d.clear_drives();
+                d.tool = Placement::IDENTITY;
+                for (j, q) in joints.iter().zip(capp_core::pips::home()) {
+                    let _ = d.joints.push(*j);
+                    let _ = d.start.push(q);
+                }
+            }
+            Command::Joint { index, joint } => {
+                let j = capp_core::Joint::from(*joint);
+                let values = [
+                    j.alpha, j.a, j.theta, j.d, j.min, j.max, j.max_rate, j.weight,
+                ];
+                let ok = finite(&values)
+                    && j.origin
+                        .is_none_or(|o| o.placement.is_finite() && finite(&o.axis));
+                append(&mut d.joints, *index, j, ok)?;
+            }
+            Command::Obstacle { index, obstacle } => {
+                let o = *obstacle;
+                let ok = [o.centre, o.semi_axes, o.exponents, o.euler_123]
+                    .iter()
+                    .all(|v| finite(v));
+                append(&mut d.obstacles, *index, SuperEllipsoid::from(o), ok)?;
+            }
+            Command::Waypoint { index, waypoint } => {
+                let w = *waypoint;
+                let ok = finite(&w.position)
+                    && w.orientation
+                        .is_none_or(|r| r.iter().all(|row| finite(row)));
+                append(&mut d.waypoints, *index, w.into(), ok)?;
+            }
+            Command::JointWaypoint { index, joints } => {
+                if let Some(i) = joints.iter().position(|x| !x.is_finite()) {
+                    return Err((ErrorCode::NotFinite, i as u8));
+                }
+                if d.joint_goals.is_full() {
+                    return Err((ErrorCode::Capacity, *index));
+                }
+                // A waypoint slot whose pose the core fills in at `Run`.
+                append(
+                    &mut d.waypoints,
+                    *index,
+                    capp_core::Waypoint::at([0.0; 3]),
+                    true,
+                )?;
+                let _ = d.joint_goals.push((*index, joints.clone()));
+            }
+            Command::Capsule { index, capsule } => {
+                let finite = capsule.radius.is_finite();
+                append(&mut d.capsule_radius, *index, capsule.radius, finite)?;
+                // The same length as the radii: it cannot be full.
+                let _ = d.capsule_rows.push(capsule.checked);
+            }
+            Command::Drive { index, drive } => {
+                let finite = drive.max_accel.is_finite() && drive.max_jerk.is_finite();
+                append(&mut d.drive_accel, *index, drive.max_accel, finite)?;
+                // The same length as the accelerations: it cannot be full.
+                let _ = d.drive_jerk.push(drive.max_jerk);
+            }
+            Command::Tool(tool) => {
+                let tool = Placement::from(*tool);
+                if !tool.is_finite() {
+                    return Err((ErrorCode::NotFinite, NO_INDEX));
+                }
+                d.tool = tool;
+            }
+            Command::Settings(s) => {
+                let s = capp_core::Settings::from(*s);
+                s.validate()
+                    .map_err(|_| (ErrorCode::InvalidMission, NO_INDEX))?;
+                d.settings = Some(s);
+            }
+            Command::Start(q) => {
+                if let Some(i) = q.iter().position(|x| !x.is_finite()) {
+                    return Err((ErrorCode::NotFinite, i as u8));
+                }
+                d.start = q.clone();
+            }
+            Command::Ping { .. } | Command::Run { .. } | Command::Stop | Command::Status => {}
+        }
+        Ok(())
     }
 }
 
@@ -444,9 +566,11 @@ impl<const TXQ: usize> Node<TXQ> {
 
     /// Feeds one received byte.
     pub fn receive(&mut self, byte: u8) {
-        let result = match self.rx.feed_message::<Command>(byte) {
-            None => return,
-            Some(r) => r,
+        let result = match self.rx.feed(byte) {
+            Feed::Consumed => return,
+            Feed::Overfull => Err(FrameError::Overfull),
+            // Not generic: the decoder is capp-proto's one copy.
+            Feed::Frame(frame) => capp_proto::decode_command(frame),
         };
         match result {
             Ok(command) => {
@@ -486,7 +610,6 @@ impl<const TXQ: usize> Node<TXQ> {
     }
 
     fn handle(&mut self, command: &Command) -> Result<Option<Reply>, Refusal> {
-        let d = &mut self.draft;
         match command {
             Command::Ping { nonce } => {
                 return Ok(Some(Reply::Pong {
@@ -496,97 +619,6 @@ impl<const TXQ: usize> Node<TXQ> {
                     max_obstacles: M as u8,
                     max_waypoints: W as u8,
                 }))
-            }
-            Command::Clear(part) => match part {
-                // In place: a draft is 6 KiB, too big for a temporary on
-                // the serving loop's stack.
-                Part::All => d.clear(),
-                Part::Robot => {
-                    d.joints.clear();
-                    d.start.clear();
-                    d.clear_capsules();
-                    d.clear_drives();
-                }
-                Part::Obstacles => d.obstacles.clear(),
-                Part::Waypoints => {
-                    d.waypoints.clear();
-                    d.joint_goals.clear();
-                }
-                Part::Capsules => d.clear_capsules(),
-                Part::Drives => d.clear_drives(),
-            },
-            Command::Preset(Preset::Pips) => {
-                let joints = capp_core::pips::joints();
-                d.joints.clear();
-                d.start.clear();
-                // The old robot's capsules and drives do not fit the preset.
-                d.clear_capsules();
-                d.clear_drives();
-                for (j, q) in joints.iter().zip(capp_core::pips::home()) {
-                    let _ = d.joints.push(*j);
-                    let _ = d.start.push(q);
-                }
-            }
-            Command::Joint { index, joint } => {
-                let j = capp_core::Joint::from(*joint);
-                let values = [
-                    j.alpha, j.a, j.theta, j.d, j.min, j.max, j.max_rate, j.weight,
-                ];
-                append(&mut d.joints, *index, j, finite(&values))?;
-            }
-            Command::Obstacle { index, obstacle } => {
-                let o = *obstacle;
-                let ok = [o.centre, o.semi_axes, o.exponents, o.euler_123]
-                    .iter()
-                    .all(|v| finite(v));
-                append(&mut d.obstacles, *index, SuperEllipsoid::from(o), ok)?;
-            }
-            Command::Waypoint { index, waypoint } => {
-                let w = *waypoint;
-                let ok = finite(&w.position)
-                    && w.orientation
-                        .is_none_or(|r| r.iter().all(|row| finite(row)));
-                append(&mut d.waypoints, *index, w.into(), ok)?;
-            }
-            Command::JointWaypoint { index, joints } => {
-                if let Some(i) = joints.iter().position(|x| !x.is_finite()) {
-                    return Err((ErrorCode::NotFinite, i as u8));
-                }
-                if d.joint_goals.is_full() {
-                    return Err((ErrorCode::Capacity, *index));
-                }
-                // A waypoint slot whose pose the core fills in at `Run`.
-                append(
-                    &mut d.waypoints,
-                    *index,
-                    capp_core::Waypoint::at([0.0; 3]),
-                    true,
-                )?;
-                let _ = d.joint_goals.push((*index, joints.clone()));
-            }
-            Command::Capsule { index, capsule } => {
-                let finite = capsule.radius.is_finite();
-                append(&mut d.capsule_radius, *index, capsule.radius, finite)?;
-                // The same length as the radii: it cannot be full.
-                let _ = d.capsule_rows.push(capsule.checked);
-            }
-            Command::Drive { index, drive } => {
-                let finite = drive.max_accel.is_finite() && drive.max_jerk.is_finite();
-                append(&mut d.drive_accel, *index, drive.max_accel, finite)?;
-                // The same length as the accelerations: it cannot be full.
-                let _ = d.drive_jerk.push(drive.max_jerk);
-            }
-            Command::Settings(s) => {
-                let s = capp_core::Settings::from(*s);
-                s.validate()
-                    .map_err(|_| (ErrorCode::InvalidMission, NO_INDEX))?;
-                d.settings = Some(s);
-            }
-            Command::Start(q) => {
-                if let Some(i) = q.iter().position(|x| !x.is_finite()) {
-                    return Err((ErrorCode::NotFinite, i as u8));
-                }
-                d.start = q.clone();
             }
             Command::Run {
                 every,
@@ -614,6 +646,7 @@ impl<const TXQ: usize> Node<TXQ> {
                 self.status.stack_peak = self.stack_probe.map_or(0, |p| p());
                 return Ok(Some(Reply::Status(self.status)));
             }
+            load => self.draft.load(load)?,
         }
         Ok(None)
     }
@@ -628,8 +661,9 @@ impl<const TXQ: usize> Node<TXQ> {
         let d = &self.draft;
         let plan = &mut self.plan;
         plan.scenario
-            .init(
+            .init_with_tool(
                 &d.joints,
+                &d.tool,
                 &d.obstacles,
                 &d.waypoints,
                 d.settings.unwrap_or_default(),

@@ -14,6 +14,7 @@ use embedded_hal_nb::{nb, serial};
 use super::*;
 
 mod drive;
+mod general;
 mod line;
 
 /// A UART that takes at most `budget` bytes per `refill` (a slow line).
@@ -808,6 +809,7 @@ fn a_start_in_self_collision_is_refused() {
         max: 3.1,
         max_rate: 1.0,
         weight: 1.0,
+        origin: None,
     };
     let start = [0.0, 2.9, 2.9];
     let robot = Robot::<32>::new(&[capp_core::Joint::from(joint); 3]).unwrap();

@@ -1,5 +1,5 @@
 //! Conversions to and from capp-core's types (feature `core`). Values are
-//! copied bit for bit; validation stays with capp-core's constructors.
+//! copied bit for bit (a joint's origin and the tool too); validation stays with capp-core's constructors.
 
 use capp_core::avoidance::AvoidanceSettings;
 use capp_core::control::{LawKind as CoreLaw, LawSettings};
@@ -7,7 +7,47 @@ use capp_core::escape::EscapeSettings;
 use capp_core::planner::Outcome as CoreOutcome;
 use capp_core::{JointKind as CoreKind, SuperEllipsoid};
 
-use crate::{EscapeMode, Joint, JointKind, LawKind, Obstacle, Outcome, Settings, Waypoint};
+use capp_core::robot::{JointOrigin, Placement as CorePlacement};
+
+use crate::{
+    EscapeMode, Joint, JointKind, LawKind, Obstacle, Origin, Outcome, Placement, Settings, Waypoint,
+};
+
+impl From<CorePlacement> for Placement {
+    fn from(p: CorePlacement) -> Self {
+        Placement {
+            rotation: p.rotation,
+            translation: p.translation,
+        }
+    }
+}
+
+impl From<Placement> for CorePlacement {
+    fn from(p: Placement) -> Self {
+        CorePlacement {
+            rotation: p.rotation,
+            translation: p.translation,
+        }
+    }
+}
+
+impl From<JointOrigin> for Origin {
+    fn from(o: JointOrigin) -> Self {
+        Origin {
+            placement: o.placement.into(),
+            axis: o.axis,
+        }
+    }
+}
+
+impl From<Origin> for JointOrigin {
+    fn from(o: Origin) -> Self {
+        JointOrigin {
+            placement: o.placement.into(),
+            axis: o.axis,
+        }
+    }
+}
 
 impl From<CoreKind> for JointKind {
     fn from(k: CoreKind) -> Self {
@@ -39,6 +79,7 @@ impl From<capp_core::Joint> for Joint {
             max: j.max,
             max_rate: j.max_rate,
             weight: j.weight,
+            origin: j.origin.map(Origin::from),
         }
     }
 }
@@ -55,7 +96,7 @@ impl From<Joint> for capp_core::Joint {
             max: j.max,
             max_rate: j.max_rate,
             weight: j.weight,
-            origin: None,
+            origin: j.origin.map(JointOrigin::from),
         }
     }
 }

@@ -103,6 +103,14 @@ pub fn decode<T: DeserializeOwned>(frame: &mut [u8]) -> Result<T, FrameError> {
     }
 }
 
+/// [`decode`] for a [`Command`](crate::Command): the board's decoder, compiled
+/// once, here (not generic, so it is built with capp-proto's optimisation
+/// level: the firmware builds this crate for size, see firmware/Cargo.toml).
+#[inline(never)]
+pub fn decode_command(frame: &mut [u8]) -> Result<crate::Command, FrameError> {
+    decode(frame)
+}
+
 /// What one byte did to an [`Accumulator`].
 #[derive(Debug, PartialEq, Eq)]
 pub enum Feed<'a> {

@@ -32,12 +32,12 @@ pub use convert::{escape_status, run_command, setpoint_filter};
 pub mod crc;
 pub mod frame;
 
-pub use frame::{decode, encode, Accumulator, Feed, FrameError, MAX_FRAME};
+pub use frame::{decode, decode_command, encode, Accumulator, Feed, FrameError, MAX_FRAME};
 
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 8;
+pub const VERSION: u8 = 9;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -63,6 +63,30 @@ pub enum JointKind {
     Prismatic,
 }
 
+/// A rigid transform (capp-core's `robot::Placement`): `p -> rotation p +
+/// translation` (since version 9).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Placement {
+    /// Rotation, row by row (a proper rotation).
+    pub rotation: [[f32; 3]; 3],
+    /// Translation, length units.
+    pub translation: [f32; 3],
+}
+
+/// Where a general (URDF) joint sits and what it moves about (capp-core's
+/// `robot::JointOrigin`; since version 9).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Origin {
+    /// The transform from the previous joint's (moved) frame, or the base,
+    /// to this joint's frame at `q = 0` (a URDF joint's `<origin>`).
+    pub placement: Placement,
+    /// The axis the joint turns about or slides along, in its own frame (a
+    /// URDF joint's `<axis>`; any length above 1e-3, it is normalised).
+    pub axis: [f32; 3],
+}
+
 /// One joint and its link (capp-core's `Joint`, field for field).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -85,6 +109,10 @@ pub struct Joint {
     pub max_rate: f32,
     /// Weight in `(0, 1]`.
     pub weight: f32,
+    /// A general joint's origin and axis (then `alpha`, `a`, `theta` and `d`
+    /// are not used), or none: a DH row. A robot's joints are all one or all
+    /// the other (since version 9).
+    pub origin: Option<Origin>,
 }
 
 /// A super-ellipsoid obstacle (capp-core's `SuperEllipsoid`).
@@ -242,7 +270,8 @@ pub enum Part {
     /// Everything: joints, capsules, obstacles, waypoints, start; settings
     /// to defaults.
     All,
-    /// The joints (and the start and the capsules).
+    /// The joints (and the start, the capsules, the drive limits and the
+    /// tool).
     Robot,
     /// The obstacles.
     Obstacles,
@@ -338,6 +367,11 @@ pub enum Command {
         /// Its limits.
         drive: Drive,
     },
+    /// 14: the tool: the end effector's frame in the last joint's frame (for
+    /// DH rows frame `n`, for general joints the last joint's moved frame;
+    /// since version 9). Until one is sent (and after `Clear(All)`,
+    /// `Clear(Robot)` or `Preset`) the identity.
+    Tool(Placement),
 }
 
 impl Command {
@@ -358,6 +392,7 @@ impl Command {
             Command::JointWaypoint { .. } => 11,
             Command::Capsule { .. } => 12,
             Command::Drive { .. } => 13,
+            Command::Tool(_) => 14,
         }
     }
 }
@@ -382,7 +417,8 @@ pub enum ErrorCode {
     OutOfOrder,
     /// 7: more items than the capacity.
     Capacity,
-    /// 8: the robot failed validation (`index` = the joint, or `NO_INDEX`).
+    /// 8: the robot failed validation (`index` = the joint, or `NO_INDEX`:
+    /// the chain as a whole or, since version 9, the tool).
     InvalidRobot,
     /// 9: an obstacle failed validation (`index` = the obstacle).
     InvalidObstacle,

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 08 00 01, CRC-32 0x8655b83c (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 09 00 01, CRC-32 0x8797d20b (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x08, 0x06, 0x01, 0x3c, 0xb8, 0x55, 0x86, 0x00]
+        &[0x02, 0x09, 0x06, 0x01, 0x0b, 0xd2, 0x97, 0x87, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x08, 0x01, 0x08, 0xd9, 0x31, 0x92, 0xe6, 0x00]
+        &[0x08, 0x09, 0x01, 0x08, 0xee, 0x5b, 0x50, 0xe7, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x08, 0x02, 0xff, 0x01, 0xff, 0x76, 0x9e, 0xda, 0xd6, 0x00]
+        &[0x0a, 0x09, 0x02, 0xff, 0x01, 0xff, 0xc6, 0xb7, 0xba, 0xeb, 0x00]
     );
 }
 
@@ -85,6 +85,7 @@ fn every_command_is_pinned() {
         max: 1.0,
         max_rate: 2.0,
         weight: 1.0,
+        origin: None,
     };
     check(
         &Command::Joint { index: 3, joint },
@@ -98,6 +99,83 @@ fn every_command_is_pinned() {
             &ONE,
             &TWO,
             &ONE,
+            &[0x00],
+        ]),
+    );
+    // A general (URDF) joint: revolute about its z, half a unit up from the
+    // previous joint's frame, turned a quarter about z (rows 0 -1 0, 1 0 0,
+    // 0 0 1); its DH fields are not used (zeros).
+    let general = Joint {
+        kind: JointKind::Revolute,
+        alpha: 0.0,
+        a: 0.0,
+        theta: 0.0,
+        d: 0.0,
+        min: -1.0,
+        max: 1.0,
+        max_rate: 2.0,
+        weight: 1.0,
+        origin: Some(Origin {
+            placement: Placement {
+                rotation: [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+                translation: [0.0, 0.0, 0.5],
+            },
+            axis: [0.0, 0.0, 1.0],
+        }),
+    };
+    check(
+        &Command::Joint {
+            index: 0,
+            joint: general,
+        },
+        &cat(&[
+            &[0x03, 0x00, 0x00],
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &MINUS_ONE,
+            &ONE,
+            &TWO,
+            &ONE,
+            &[0x01],
+            &ZERO,
+            &MINUS_ONE,
+            &ZERO,
+            &ONE,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ONE,
+            &ZERO,
+            &ZERO,
+            &HALF,
+            &ZERO,
+            &ZERO,
+            &ONE,
+        ]),
+    );
+    // The tool: no rotation, two units along z.
+    check(
+        &Command::Tool(Placement {
+            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.0, 0.0, 2.0],
+        }),
+        &cat(&[
+            &[0x0E],
+            &ONE,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ONE,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ONE,
+            &ZERO,
+            &ZERO,
+            &TWO,
         ]),
     );
     let obstacle = Obstacle {
@@ -313,7 +391,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x08, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x09, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -531,6 +609,32 @@ fn the_largest_messages_fit_a_frame() {
     };
     let n = encode(&capsule, &mut f).unwrap();
     assert!(n <= MAX_FRAME);
+    // The largest joint: a general one (96 payload bytes: its `Joint` is 94).
+    let m = f32::MAX;
+    let general = Command::Joint {
+        index: u8::MAX,
+        joint: Joint {
+            kind: JointKind::Prismatic,
+            alpha: m,
+            a: m,
+            theta: m,
+            d: m,
+            min: m,
+            max: m,
+            max_rate: m,
+            weight: m,
+            origin: Some(Origin {
+                placement: Placement {
+                    rotation: [[m; 3]; 3],
+                    translation: [m; 3],
+                },
+                axis: [m; 3],
+            }),
+        },
+    };
+    assert_eq!(payload(&general).len(), 96);
+    let n = encode(&general, &mut f).unwrap();
+    assert!(n <= 256, "{n} bytes");
     // Too many joints for the wire: 33 values do not decode.
     let mut body = vec![VERSION, 0x07, 33];
     body.extend(std::iter::repeat_n(0x3Fu8, 33 * 4));
@@ -579,6 +683,8 @@ fn bad_frames_are_reported_not_decoded() {
     for body in [
         &[VERSION, 11][..],
         &[VERSION, 13],
+        &[VERSION, 14, 0, 0],
+        &[VERSION, 15],
         &[VERSION, 9, 0],
         &[VERSION, 8],
         &[VERSION, 12, 0, 0, 0, 0xC0],
@@ -653,9 +759,20 @@ fn sample_commands() -> Vec<Command> {
                 max: 1.5,
                 max_rate: 0.2,
                 weight: 1.0,
+                origin: (i % 2 == 1).then_some(Origin {
+                    placement: Placement {
+                        rotation: [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]],
+                        translation: [x, 0.0, -0.25],
+                    },
+                    axis: [0.0, 1.0, 0.0],
+                }),
             },
         });
     }
+    v.push(Command::Tool(Placement {
+        rotation: [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        translation: [0.1, -0.2, 0.3],
+    }));
     v
 }
 
