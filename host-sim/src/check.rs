@@ -63,7 +63,12 @@ pub const SELF_SLACK: f64 = 1.0e-5;
 /// ([`crate::geometry::longest_links`]). The tolerances of the kinematics
 /// and self-collision checks are fractions of it.
 pub fn scale(problem: &Problem) -> f64 {
-    let norm = |t: [f32; 3]| t.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>().sqrt();
+    let norm = |t: [f32; 3]| {
+        t.iter()
+            .map(|&x| (x as f64) * (x as f64))
+            .sum::<f64>()
+            .sqrt()
+    };
     if let Some(first) = problem.joints.first().and_then(|j| j.origin) {
         return 1.0
             + norm(first.placement.translation)

@@ -59,8 +59,8 @@
 //! repeated squaring, so a clearance is the same number on every machine:
 //! case generation and certification that depend on it repeat bit for bit.
 
-use capp_core::self_collision::pairs::PairStatus;
 use capp_core::robot::Placement;
+use capp_core::self_collision::pairs::PairStatus;
 use capp_core::{Joint, JointKind};
 
 use crate::problem::Problem;
@@ -188,7 +188,12 @@ fn motion(kind: JointKind, axis: [f32; 3], q: f64) -> M4 {
 /// origin (or the tool's), plus a prismatic joint's largest extension; the
 /// tool lengthens the last link.
 pub fn longest_links(joints: &[Joint], tool: &Placement) -> Vec<f64> {
-    let norm = |t: [f32; 3]| t.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>().sqrt();
+    let norm = |t: [f32; 3]| {
+        t.iter()
+            .map(|&x| (x as f64) * (x as f64))
+            .sum::<f64>()
+            .sqrt()
+    };
     let tool_length = norm(tool.translation);
     let n = joints.len();
     joints

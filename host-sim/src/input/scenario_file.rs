@@ -791,7 +791,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let settings_line = file.settings.as_ref().map(|s| at(s.span()));
     let s = file.settings.map(|s| s.into_inner()).unwrap_or_default();
     let f = |v: Option<f64>, d: f32| v.map_or(d, |x| x as f32);
-    let mut settings = match (s.characteristic_length, Robot::<MAX_JOINTS>::new_with_tool(&joints, &tool)) {
+    let mut settings = match (
+        s.characteristic_length,
+        Robot::<MAX_JOINTS>::new_with_tool(&joints, &tool),
+    ) {
         (Some(length), _) if length.is_finite() && length > 0.0 => {
             Settings::relative_to(length as f32)
         }

@@ -76,7 +76,13 @@ pub fn import(path: &Path, options: &LoadOptions, per_metre: f64) -> Result<Urdf
             placement: placement(&j.origin, per_metre),
             axis: [a.x as f32, a.y as f32, a.z as f32],
         };
-        joints.push(Joint::general(kind, origin, min as f32, max as f32, rate as f32));
+        joints.push(Joint::general(
+            kind,
+            origin,
+            min as f32,
+            max as f32,
+            rate as f32,
+        ));
         home.push(if min <= 0.0 && 0.0 <= max {
             0.0
         } else {
@@ -130,7 +136,12 @@ pub fn enclosing_radius(body: &Body, end: &Vector3<f64>) -> Option<f64> {
     };
     body.capsules
         .iter()
-        .map(|c| chord.segment_distance(&c.a).max(chord.segment_distance(&c.b)) + c.radius)
+        .map(|c| {
+            chord
+                .segment_distance(&c.a)
+                .max(chord.segment_distance(&c.b))
+                + c.radius
+        })
         .reduce(f64::max)
 }
 
