@@ -30,6 +30,9 @@ pub struct Draft {
     /// The smallest link clearance starts and goals keep, when the family
     /// asks for it ([`Draft::keep_links_apart`]).
     link_margin: Option<f64>,
+    /// The box random starts and goals are drawn in, when narrower than the
+    /// joint limits ([`Draft::sample_within`]).
+    sample_limits: Option<Vec<(f64, f64)>>,
 }
 
 /// The closest checked pair of links of a configuration, with the
@@ -79,6 +82,7 @@ impl Draft {
             problem,
             geometry,
             link_margin: None,
+            sample_limits: None,
         })
     }
 
@@ -105,6 +109,26 @@ impl Draft {
             Some(margin) => self.link_gap(q, 0).is_none_or(|g| g.clearance >= margin),
             None => true,
         }
+    }
+
+    /// From now on random starts and goals ([`Draft::random_clear`],
+    /// [`Draft::random_goal`]) are drawn within `within` of each joint's
+    /// middle (radians or length units), clipped to its limits; the
+    /// planner and the oracle keep the whole range.
+    pub fn sample_within(&mut self, within: f64) {
+        let limits = self
+            .limits()
+            .into_iter()
+            .map(|(lo, hi)| {
+                let mid = 0.5 * (lo + hi);
+                (lo.max(mid - within), hi.min(mid + within))
+            })
+            .collect();
+        self.sample_limits = Some(limits);
+    }
+
+    fn sampling_box(&self) -> Vec<(f64, f64)> {
+        self.sample_limits.clone().unwrap_or_else(|| self.limits())
     }
 
     /// The loaded problem of the draft.
@@ -163,9 +187,10 @@ impl Draft {
     }
 
     /// A random configuration within `fraction` of every joint's range about
-    /// its middle, clear of the scene (`tries` draws at most).
+    /// its middle (of the box of [`Draft::sample_within`], when set), clear
+    /// of the scene (`tries` draws at most).
     pub fn random_clear(&self, rng: &mut Rng, fraction: f64, tries: usize) -> Option<Vec<f64>> {
-        let limits = self.limits();
+        let limits = self.sampling_box();
         (0..tries)
             .map(|_| random_config(rng, &limits, fraction))
             .find(|q| self.clear(q))
@@ -182,7 +207,7 @@ impl Draft {
         tries: usize,
     ) -> Option<Vec<f64>> {
         let p0 = end_pose(&self.problem, from).0;
-        let limits = self.limits();
+        let limits = self.sampling_box();
         (0..tries)
             .map(|_| random_config(rng, &limits, fraction))
             .find(|q| dist(end_pose(&self.problem, q).0, p0) >= min_move && self.clear(q))

@@ -7,10 +7,15 @@
 //! to the repository root by `[robot] packages`), and the pairs checked for
 //! self-collision are the loader's (`capp acm`). The file names the URDF
 //! and the package root by absolute paths ([`crate::case::UrdfRobot`]).
-//! Every joint is limited to +-pi by `[[robot.overrides]]` (the URDF gives
-//! +-2 pi but for the elbow), as `ur5_joint_limited_robot.urdf` of the same
-//! package does: one turn each way, so a goal configuration is one of the
-//! few that reach its pose.
+//! Joint limits are the URDF's (+-2 pi, the elbow +-pi, as the real arm);
+//! random starts and goals are drawn within 80 % of +-pi about each joint's
+//! middle ([`Draft::sample_within`]), so they use the first turn of each
+//! joint and the planner and the oracle may turn further. (Limiting the
+//! joints to +-pi by `[[robot.overrides]]`, as the package's
+//! `ur5_joint_limited_robot.urdf` does, made targets that a wrist reaches
+//! only the long way round: in a first run of seed 1 the planner reached
+//! 79 % of the certified cases, and each of the eight unreached ones looked
+//! at ended with a joint at its limit.)
 //!
 //! Scene: the table top just under the base; a low shelf unit standing on
 //! it (two side panels, one or two boards, a top, sometimes a back panel;
@@ -40,32 +45,17 @@ pub const FAMILY: Family = Family {
 /// Smallest `gap / (r_a + r_b)` of any checked link pair at a start or goal.
 pub const LINK_MARGIN: f64 = 0.1;
 
-/// The joints, by URDF name.
-pub const JOINTS: [&str; 6] = [
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-];
-
 /// A ready pose, radians: upper arm up, forearm forward, tool down.
 pub const READY: [f64; 6] = [0.0, -1.571, 1.571, -1.571, -1.571, 0.0];
 
-/// The robot: the vendored URDF, base to tool flange, joints within +-pi.
+/// The robot: the vendored URDF, base to tool flange.
 pub fn robot() -> UrdfRobot {
-    let pi = std::f64::consts::PI;
     UrdfRobot {
         urdf: repo_path("robots/ur_description/urdf/ur5_robot.urdf"),
         base_link: "base_link",
         tip_link: "tool0",
         packages: vec![("example-robot-data", repo_path(""))],
-        overrides: JOINTS
-            .iter()
-            .filter(|&&j| j != "elbow_joint")
-            .map(|&j| (j, vec![("min", num(-pi)), ("max", num(pi))]))
-            .collect(),
+        overrides: Vec::new(),
     }
 }
 
@@ -95,6 +85,7 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
         ],
     })?;
     draft.keep_links_apart(LINK_MARGIN)?;
+    draft.sample_within(std::f64::consts::PI);
 
     let top = -0.01 - rng.range(0.0, 0.04);
     draft.push(Obstacle::cuboid(
