@@ -68,6 +68,49 @@ pub enum RobotSpec {
     Pips,
     /// A revolute DH table.
     Table(Vec<DhJoint>),
+    /// A URDF file's chain ([`UrdfRobot`]).
+    Urdf(UrdfRobot),
+}
+
+/// A robot from a URDF file: `[robot] urdf`, `base_link`, `tip_link`,
+/// `packages` and `[[robot.overrides]]`.
+///
+/// A generated case is read as `<name>.toml` in no particular directory
+/// ([`parse`]), so a relative `urdf` path would resolve against the working
+/// directory: the paths here are absolute ([`repo_path`]), and a case file
+/// written anywhere (`--write-cases`) loads as it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfRobot {
+    /// The URDF file (absolute).
+    pub urdf: String,
+    /// The chain's base link.
+    pub base_link: &'static str,
+    /// The chain's tip link.
+    pub tip_link: &'static str,
+    /// `package://NAME/...` roots (absolute).
+    pub packages: Vec<(&'static str, String)>,
+    /// Per joint (by URDF name): `key = value` lines (TOML, radians / file
+    /// units), e.g. `("min", "-3.1415927")`.
+    pub overrides: Vec<(&'static str, Vec<(&'static str, String)>)>,
+}
+
+/// `rel` (a path under the repository root, `/`-separated) as an absolute
+/// path: the root is two folders above this crate's manifest.
+pub fn repo_path(rel: &str) -> String {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .and_then(Path::parent)
+        .unwrap_or(Path::new("."));
+    let mut path = root.to_path_buf();
+    if !rel.is_empty() {
+        path.push(rel);
+    }
+    path.to_string_lossy().into_owned()
+}
+
+/// A TOML basic string: quoted, with backslashes and quotes escaped.
+fn toml_string(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
 /// A super-ellipsoid (eq. 25), lengths in the file's unit, Euler angles in radians.
@@ -190,17 +233,41 @@ impl Spec {
             "\n[units]\nangle = \"radians\"\nlength = \"{}\"",
             self.unit.toml()
         );
-        if self.robot == RobotSpec::Pips || !self.robot_settings.is_empty() {
+        if matches!(self.robot, RobotSpec::Pips | RobotSpec::Urdf(_))
+            || !self.robot_settings.is_empty()
+        {
             s.push_str("\n[robot]\n");
         }
-        if self.robot == RobotSpec::Pips {
-            s.push_str("preset = \"pips\"\n");
+        match &self.robot {
+            RobotSpec::Pips => s.push_str("preset = \"pips\"\n"),
+            RobotSpec::Urdf(u) => {
+                let _ = writeln!(s, "urdf = {}", toml_string(&u.urdf));
+                let _ = writeln!(s, "base_link = {}", toml_string(u.base_link));
+                let _ = writeln!(s, "tip_link = {}", toml_string(u.tip_link));
+                if !u.packages.is_empty() {
+                    let items: Vec<String> = u
+                        .packages
+                        .iter()
+                        .map(|(name, dir)| format!("{} = {}", toml_string(name), toml_string(dir)))
+                        .collect();
+                    let _ = writeln!(s, "packages = {{ {} }}", items.join(", "));
+                }
+            }
+            RobotSpec::Table(_) => {}
         }
         for (k, v) in &self.robot_settings {
             let _ = writeln!(s, "{k} = {v}");
         }
         match &self.robot {
             RobotSpec::Pips => {}
+            RobotSpec::Urdf(u) => {
+                for (joint, lines) in &u.overrides {
+                    let _ = writeln!(s, "\n[[robot.overrides]]\njoint = {}", toml_string(joint));
+                    for (k, v) in lines {
+                        let _ = writeln!(s, "{k} = {v}");
+                    }
+                }
+            }
             RobotSpec::Table(joints) => {
                 for j in joints {
                     let _ = writeln!(

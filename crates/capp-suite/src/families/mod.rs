@@ -6,6 +6,8 @@
 //! | [`pips_bay`] | PIPS (inches) | payload bay: floor, bulkheads, side walls, cylindrical payloads, equipment, boxes in the way | pose; both tolerance sets |
 //! | [`pips_free`] | PIPS | none | pose over the reachable workspace |
 //! | [`iiwa_shelves`] | KUKA LBR iiwa 7 (metres) | table, shelf unit, boxes in the way | pose |
+//! | [`panda_shelves`] | Franka Emika Panda from its URDF (metres) | table, shelf unit, boxes in the way | pose |
+//! | [`ur5_table`] | Universal Robots UR5 from its URDF (metres), joints within +-pi | table, low shelf unit, boxes on the table and in the way | pose |
 //! | [`planar_posts`] | the planar 3-link arm (metres) | round posts | position |
 //! | [`snake_folds`] | a 12- to 24-joint snake (metres), its links kept apart | floor, pedestal, a ring of posts, boxes in the way | pose or position near its own base, behind it, inside the ring |
 //!
@@ -19,11 +21,13 @@
 //! by `Planner::new`. Every draw has a bounded number of retries.
 
 pub mod iiwa_shelves;
+pub mod panda_shelves;
 pub mod pips_bay;
 pub mod pips_free;
 pub mod planar_posts;
 pub mod scene;
 pub mod snake_folds;
+pub mod ur5_table;
 
 use anyhow::{bail, Result};
 
@@ -49,6 +53,8 @@ pub fn families() -> Vec<Family> {
         pips_bay::FAMILY,
         pips_free::FAMILY,
         iiwa_shelves::FAMILY,
+        panda_shelves::FAMILY,
+        ur5_table::FAMILY,
         planar_posts::FAMILY,
         snake_folds::FAMILY,
     ]

@@ -30,6 +30,9 @@ pub struct Draft {
     /// The smallest link clearance starts and goals keep, when the family
     /// asks for it ([`Draft::keep_links_apart`]).
     link_margin: Option<f64>,
+    /// The box random starts and goals are drawn in, when narrower than the
+    /// joint limits ([`Draft::sample_within`]).
+    sample_limits: Option<Vec<(f64, f64)>>,
 }
 
 /// The closest checked pair of links of a configuration, with the
@@ -79,6 +82,7 @@ impl Draft {
             problem,
             geometry,
             link_margin: None,
+            sample_limits: None,
         })
     }
 
@@ -105,6 +109,26 @@ impl Draft {
             Some(margin) => self.link_gap(q, 0).is_none_or(|g| g.clearance >= margin),
             None => true,
         }
+    }
+
+    /// From now on random starts and goals ([`Draft::random_clear`],
+    /// [`Draft::random_goal`]) are drawn within `within` of each joint's
+    /// middle (radians or length units), clipped to its limits; the
+    /// planner and the oracle keep the whole range.
+    pub fn sample_within(&mut self, within: f64) {
+        let limits = self
+            .limits()
+            .into_iter()
+            .map(|(lo, hi)| {
+                let mid = 0.5 * (lo + hi);
+                (lo.max(mid - within), hi.min(mid + within))
+            })
+            .collect();
+        self.sample_limits = Some(limits);
+    }
+
+    fn sampling_box(&self) -> Vec<(f64, f64)> {
+        self.sample_limits.clone().unwrap_or_else(|| self.limits())
     }
 
     /// The loaded problem of the draft.
@@ -163,9 +187,10 @@ impl Draft {
     }
 
     /// A random configuration within `fraction` of every joint's range about
-    /// its middle, clear of the scene (`tries` draws at most).
+    /// its middle (of the box of [`Draft::sample_within`], when set), clear
+    /// of the scene (`tries` draws at most).
     pub fn random_clear(&self, rng: &mut Rng, fraction: f64, tries: usize) -> Option<Vec<f64>> {
-        let limits = self.limits();
+        let limits = self.sampling_box();
         (0..tries)
             .map(|_| random_config(rng, &limits, fraction))
             .find(|q| self.clear(q))
@@ -182,7 +207,7 @@ impl Draft {
         tries: usize,
     ) -> Option<Vec<f64>> {
         let p0 = end_pose(&self.problem, from).0;
-        let limits = self.limits();
+        let limits = self.sampling_box();
         (0..tries)
             .map(|_| random_config(rng, &limits, fraction))
             .find(|q| dist(end_pose(&self.problem, q).0, p0) >= min_move && self.clear(q))
@@ -372,4 +397,92 @@ pub fn end_path_points(problem: &Problem, a: &[f64], b: &[f64]) -> Vec<[f64; 3]>
 /// Euclidean distance.
 pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     libm::sqrt((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+}
+
+/// Sizes of a shelf unit ([`shelf_unit`]), each a range to draw from, metres.
+#[derive(Clone, Copy, Debug)]
+pub struct ShelfSizes {
+    /// Azimuth of the unit about the base, radians.
+    pub azimuth: (f64, f64),
+    /// Distance of its front from the base's axis.
+    pub near: (f64, f64),
+    /// Half its depth.
+    pub half_depth: (f64, f64),
+    /// Half its width.
+    pub half_width: (f64, f64),
+    /// Its height above the table top.
+    pub height: (f64, f64),
+    /// Most boards between the floor and the top (at least one).
+    pub boards: usize,
+}
+
+/// A shelf unit standing on the table top `top` (as `iiwa_shelves` builds
+/// its own): two side panels, a top, one to `boards` boards, sometimes a
+/// back panel, built facing the robot along `+x` and turned to a random
+/// azimuth. Returns the panels and the number of boards.
+pub fn shelf_unit(rng: &mut Rng, top: f64, sizes: &ShelfSizes) -> (Vec<Obstacle>, usize) {
+    let azimuth = rng.range(sizes.azimuth.0, sizes.azimuth.1);
+    let near = rng.range(sizes.near.0, sizes.near.1);
+    let depth = rng.range(sizes.half_depth.0, sizes.half_depth.1);
+    let width = rng.range(sizes.half_width.0, sizes.half_width.1);
+    let height = rng.range(sizes.height.0, sizes.height.1);
+    let x = near + depth;
+    let t = 0.015;
+    let mut shelf = vec![
+        Obstacle::cuboid(
+            "shelf side 1",
+            [x, -width, top + 0.5 * height],
+            [depth, t, 0.5 * height],
+        ),
+        Obstacle::cuboid(
+            "shelf side 2",
+            [x, width, top + 0.5 * height],
+            [depth, t, 0.5 * height],
+        ),
+        Obstacle::cuboid("shelf top", [x, 0.0, top + height], [depth, width, t]),
+    ];
+    let boards = 1 + rng.below(sizes.boards.max(1));
+    for k in 0..boards {
+        let z = top + height * (k + 1) as f64 / (boards + 1) as f64 + rng.range(-0.04, 0.04);
+        shelf.push(Obstacle::cuboid(
+            format!("shelf board {}", k + 1),
+            [x, 0.0, z],
+            [depth, width, t],
+        ));
+    }
+    if rng.chance(0.5) {
+        shelf.push(Obstacle::cuboid(
+            "shelf back",
+            [x + depth, 0.0, top + 0.5 * height],
+            [t, width, 0.5 * height],
+        ));
+    }
+    (
+        shelf.into_iter().map(|o| o.turned(azimuth)).collect(),
+        boards,
+    )
+}
+
+/// A box standing on the table top `top` at distance `reach` from the
+/// base's axis and a random azimuth in `azimuth`, half sizes drawn from
+/// `half_size` (its half height from `half_height`).
+pub fn box_on_table(
+    rng: &mut Rng,
+    name: impl Into<String>,
+    top: f64,
+    reach: (f64, f64),
+    azimuth: (f64, f64),
+    half_size: (f64, f64),
+    half_height: (f64, f64),
+) -> Obstacle {
+    let s = [
+        rng.range(half_size.0, half_size.1),
+        rng.range(half_size.0, half_size.1),
+        rng.range(half_height.0, half_height.1),
+    ];
+    let r = rng.range(reach.0, reach.1);
+    let spin = rng.range(-1.5, 1.5);
+    let mut o = Obstacle::cuboid(name, [r, 0.0, top + s[2]], s);
+    o.euler[2] = spin;
+    o.turned(rng.range(azimuth.0, azimuth.1))
 }
