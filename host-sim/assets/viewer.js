@@ -148,7 +148,7 @@
   legendRow('#d05a28', 'links; their end-effector frame');
   legendRow('#4f86d6', 'link capsules (checkbox above): ' + (RUN.self_collision
     ? 'the closest checked pair red' : 'self-collision is off in this scenario'));
-  if (RUN.collision_capsules) legendRow('#e07800', 'URDF collision capsules (fitted to the collision geometry; inside the link capsules)');
+  if (RUN.collision_capsules) legendRow('#e07800', 'URDF collision capsules (fitted to the collision geometry of each body; enclosed by the link capsules, except those of the base, which nothing checks)');
   legendRow('#8a929e', 'grid: ' + RUN.grid + ' ' + RUN.unit + ' squares; world frame at the origin');
 
   // The arm: links as cylinders between frame origins, joints as spheres.

@@ -151,7 +151,10 @@ pub fn joint_frames(joints: &[Joint], q: &[f64]) -> Vec<M4> {
         let Some(origin) = joint.origin else {
             return Vec::new();
         };
-        t = mul(&mul(&t, &homogeneous(&origin.placement)), &motion(joint.kind, origin.axis, qj));
+        t = mul(
+            &mul(&t, &homogeneous(&origin.placement)),
+            &motion(joint.kind, origin.axis, qj),
+        );
         frames.push(t);
     }
     frames

@@ -315,9 +315,11 @@ pub fn frames(origins: &[Vec<[f64; 3]>], count: usize) -> Vec<usize> {
     out
 }
 
-const LEFT: f64 = 58.0;
+/// Left margin of the first panel, pixels.
+pub const LEFT: f64 = 58.0;
 const GAP: f64 = 72.0;
-const TOP: f64 = 74.0;
+/// Top of the panels, pixels.
+pub const TOP: f64 = 74.0;
 const BOTTOM: f64 = 80.0;
 
 /// The three views, each `panel` pixels square; the arm at `snapshots`
@@ -426,7 +428,7 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
 }
 
 /// Titles of the three panels.
-const TITLES: [&str; 3] = ["top (from +z)", "front (from −y)", "side (from +x)"];
+pub const TITLES: [&str; 3] = ["top (from +z)", "front (from −y)", "side (from +x)"];
 
 /// The three panels (top, front, side), each `panel` pixels square,
 /// showing a cube of `side` length units round `centre`.
@@ -543,7 +545,13 @@ pub fn silhouettes(canvas: &mut Canvas, p: &Panel, surfaces: &[Vec<[f64; 3]>]) -
 
 /// Each obstacle's name inside its silhouette (`hulls`), away from the
 /// pixels in `avoid` and from each other.
-pub fn obstacle_names(canvas: &mut Canvas, problem: &Problem, p: &Panel, hulls: &[Vec<P2>], avoid: &[P2]) {
+pub fn obstacle_names(
+    canvas: &mut Canvas,
+    problem: &Problem,
+    p: &Panel,
+    hulls: &[Vec<P2>],
+    avoid: &[P2],
+) {
     let mut placed: Vec<P2> = Vec::new();
     for (o, h) in hulls.iter().enumerate() {
         let name = problem
