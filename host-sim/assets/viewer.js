@@ -148,6 +148,7 @@
   legendRow('#d05a28', 'links; their end-effector frame');
   legendRow('#4f86d6', 'link capsules (checkbox above): ' + (RUN.self_collision
     ? 'the closest checked pair red' : 'self-collision is off in this scenario'));
+  if (RUN.collision_capsules) legendRow('#e07800', 'URDF collision capsules (fitted to the collision geometry of each body; enclosed by the link capsules, except those of the base, which nothing checks)');
   legendRow('#8a929e', 'grid: ' + RUN.grid + ' ' + RUN.unit + ' squares; world frame at the origin');
 
   // The arm: links as cylinders between frame origins, joints as spheres.
@@ -184,10 +185,35 @@
     const radius = RUN.capsules[i];
     const parts = [new THREE.Mesh(tubeGeometry, capsuleMaterial),
       new THREE.Mesh(capGeometry, capsuleMaterial), new THREE.Mesh(capGeometry, capsuleMaterial)];
-    parts[1].scale.setScalar(radius);
-    parts[2].scale.setScalar(radius);
     parts.forEach((m) => capsules.add(m));
     tubes.push({ radius, parts });
+  }
+  // A URDF robot's fitted collision capsules (RUN.collision_capsules, per
+  // frame, each [ax, ay, az, bx, by, bz, r]), orange, with the link capsules.
+  const fitted = [];
+  const fittedMaterial = new THREE.MeshLambertMaterial({
+    color: 0xe07800, transparent: true, opacity: 0.45, depthWrite: false,
+  });
+  (RUN.collision_capsules ? RUN.collision_capsules[0] : []).forEach(() => {
+    const parts = [new THREE.Mesh(tubeGeometry, fittedMaterial),
+      new THREE.Mesh(capGeometry, fittedMaterial), new THREE.Mesh(capGeometry, fittedMaterial)];
+    parts.forEach((m) => capsules.add(m));
+    fitted.push(parts);
+  });
+  // A capsule's tube and end balls from a to b (THREE vectors), radius.
+  function placeCapsule([tube, capA, capB], from, to, radius) {
+    d.subVectors(to, from);
+    const length = d.length();
+    tube.visible = length > 1e-6 * side;
+    if (tube.visible) {
+      tube.position.addVectors(from, to).multiplyScalar(0.5);
+      tube.quaternion.setFromUnitVectors(up, d.divideScalar(length));
+      tube.scale.set(radius, length, radius);
+    }
+    capA.position.copy(from);
+    capB.position.copy(to);
+    capA.scale.setScalar(radius);
+    capB.scale.setScalar(radius);
   }
   capsules.visible = false;
   scene.add(capsules);
@@ -218,21 +244,17 @@
     }
     const close = RUN.closest_links[f];
     tubes.forEach((t, i) => {
-      const [tube, capA, capB] = t.parts;
       a.copy(joints[i].position);
       b.copy(joints[i + 1].position);
-      d.subVectors(b, a);
-      const length = d.length();
-      tube.visible = length > 1e-6 * side;
-      if (tube.visible) {
-        tube.position.addVectors(a, b).multiplyScalar(0.5);
-        tube.quaternion.setFromUnitVectors(up, d.divideScalar(length));
-        tube.scale.set(t.radius, length, t.radius);
-      }
-      capA.position.copy(a);
-      capB.position.copy(b);
+      placeCapsule(t.parts, a, b, t.radius);
       const red = close !== null && (close[0] === i + 1 || close[1] === i + 1);
       t.parts.forEach((m) => { m.material = red ? closeMaterial : capsuleMaterial; });
+    });
+    fitted.forEach((parts, i) => {
+      const c = RUN.collision_capsules[f][i];
+      a.set(c[0], c[1], c[2]);
+      b.set(c[3], c[4], c[5]);
+      placeCapsule(parts, a, b, c[6]);
     });
     orient(tool, joints[J - 1].position, RUN.end_axes, 9 * f);
   }
@@ -375,7 +397,7 @@
   }
   // viewer.html#capsules opens with the capsules shown, through the
   // checkbox as a click would.
-  if (/capsules/.test(window.location.hash)) capsuleBox.click();
+  if (RUN.capsules_shown || /capsules/.test(window.location.hash)) capsuleBox.click();
   // viewer.html#frame=N opens paused at frame N.
   const asked = /frame=(\d+)/.exec(window.location.hash);
   if (asked) setPlaying(false);

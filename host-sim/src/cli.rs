@@ -85,6 +85,13 @@ enum Command {
     Robot {
         /// Scenario file: `*.toml`, anything else is read as input.dat.
         scenario: PathBuf,
+        /// Also draw the robot at its start configuration into this folder
+        /// (robot.svg / robot.png: the three views with the link capsules
+        /// and a URDF's collision capsules; viewer.html: the 3-D viewer).
+        /// Like an output folder: refused if it exists and is neither empty
+        /// nor a finished capp folder.
+        #[arg(long, value_name = "DIR")]
+        render: Option<PathBuf>,
     },
     /// Print the link capsules and the pairs of links checked for
     /// self-collision, and why each other pair is skipped.
@@ -174,7 +181,7 @@ where
         ),
         Command::Render { dir, scenario } => render_cmd(&dir, scenario.as_deref()),
         Command::Acm { scenario } => acm_cmd(&scenario),
-        Command::Robot { scenario } => robot_cmd(&scenario),
+        Command::Robot { scenario, render } => robot_cmd(&scenario, render.as_deref()),
     };
     match result {
         Ok(code) => code,
@@ -357,9 +364,15 @@ fn check_cmd(path: &Path, scenario: Option<&Path>) -> Result<ExitCode> {
     })
 }
 
-fn robot_cmd(path: &Path) -> Result<ExitCode> {
+fn robot_cmd(path: &Path, draw: Option<&Path>) -> Result<ExitCode> {
     let problem = Problem::load(path)?;
     say(&crate::robot_report::report(&problem)?);
+    if let Some(dir) = draw {
+        output::write_folder(dir, "robot", |staging| {
+            render::robot::render_robot(&problem, staging).map(|_| ())
+        })?;
+        say(&format!("\npictures:          {}\n", dir.display()));
+    }
     Ok(ExitCode::SUCCESS)
 }
 

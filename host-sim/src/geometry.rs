@@ -140,6 +140,54 @@ pub fn forward_chain(joints: &[Joint], tool: &Placement, q: &[f64]) -> (Vec<[f64
     (origins, t)
 }
 
+/// Each general joint's frame after its motion, world (`T_j` of
+/// [`forward_chain`]: `T_j = T_{j-1} O_j M_j(q_j)`, lengths in the
+/// scenario's unit): the frame of the rigid body joint `j` moves. Empty for
+/// a DH table.
+pub fn joint_frames(joints: &[Joint], q: &[f64]) -> Vec<M4> {
+    let mut t: M4 = homogeneous(&Placement::IDENTITY);
+    let mut frames = Vec::with_capacity(joints.len());
+    for (joint, &qj) in joints.iter().zip(q) {
+        let Some(origin) = joint.origin else {
+            return Vec::new();
+        };
+        t = mul(
+            &mul(&t, &homogeneous(&origin.placement)),
+            &motion(joint.kind, origin.axis, qj),
+        );
+        frames.push(t);
+    }
+    frames
+}
+
+/// A URDF robot's collision capsules at `q`, world, in the scenario's
+/// length unit, each `[ax, ay, az, bx, by, bz, radius]`, body by body: the
+/// base's (`bodies[0]`, in the world frame: not checked by the planner),
+/// then those joint `k` moves (`bodies[k + 1]`, which link `k`'s capsule
+/// encloses). Empty for a robot without a URDF.
+pub fn collision_capsules(problem: &Problem, q: &[f64]) -> Vec<[f64; 7]> {
+    let Some(urdf) = &problem.urdf else {
+        return Vec::new();
+    };
+    let frames = joint_frames(&problem.joints, q);
+    let world = homogeneous(&Placement::IDENTITY);
+    let s = urdf.per_metre;
+    let place = |t: &M4, p: &nalgebra::Point3<f64>| {
+        let p = [p.x * s, p.y * s, p.z * s];
+        [0, 1, 2].map(|i| t[i][3] + (0..3).map(|k| t[i][k] * p[k]).sum::<f64>())
+    };
+    urdf.bodies
+        .iter()
+        .zip(std::iter::once(&world).chain(&frames))
+        .flat_map(|(body, t)| {
+            body.capsules.iter().map(move |c| {
+                let (a, b) = (place(t, &c.a), place(t, &c.b));
+                [a[0], a[1], a[2], b[0], b[1], b[2], c.radius * s]
+            })
+        })
+        .collect()
+}
+
 /// A placement as a 4x4 homogeneous matrix.
 fn homogeneous(p: &Placement) -> M4 {
     let mut m = [[0.0; 4]; 4];

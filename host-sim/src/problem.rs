@@ -125,6 +125,9 @@ pub struct UrdfSource {
     /// moved by joint `k`, each with its links and fitted capsules in its
     /// own frame.
     pub bodies: Vec<capp_urdf::Body>,
+    /// The scenario's length units per metre (`bodies` times this is in
+    /// the scenario's units).
+    pub per_metre: f64,
 }
 
 /// Seed of the sampled configurations of the allowed-collision matrix.

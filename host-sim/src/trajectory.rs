@@ -61,6 +61,28 @@ impl Trajectory {
         crate::escapes::stretches(self.rows.iter().map(|r| (r.step as u32, 0, r.escape)))
     }
 
+    /// The robot standing still at `q`: one row, step 0, nothing recorded
+    /// but the joint values (what `capp robot --render` draws).
+    pub fn still(q: &[f64]) -> Trajectory {
+        Trajectory {
+            joints: q.len(),
+            rows: vec![TrajectoryRow {
+                line: 2,
+                step: 0,
+                h: 0.0,
+                q: q.to_vec(),
+                velocity: None,
+                acceleration: None,
+                position: None,
+                v: None,
+                position_error: None,
+                orientation_error: None,
+                clearance: None,
+                escape: None,
+            }],
+        }
+    }
+
     /// The rows of a plan, as a trajectory file would give them back (the
     /// `f32` values widened exactly; `line` is the row's line in a CSV with a
     /// header).

@@ -355,3 +355,195 @@ fn capp_robot_prints_the_chain_limits_and_capsules() {
     assert!(text.contains("3 joints (DH rows"), "{text}");
     assert!(text.contains("DH alpha 0.0000  a 0.5000"), "{text}");
 }
+
+/// The fitted collision capsules ride on their bodies: at Pinocchio's 100
+/// configurations (the golden file, not our kinematics) every capsule end of
+/// the body joint `k` moves keeps its distance to joint `k`'s pivot and to
+/// the next joint's pivot (or the tip), and its offsets along joint `k`'s
+/// axis and along the next joint's (or the tip frame's x); the base's stay
+/// where they are. A capsule hung on the wrong body,
+/// or placed with the frame before its joint's motion, moves relative to
+/// those points. `joint_frames` itself puts each joint's pivot and axis
+/// where Pinocchio does.
+#[test]
+fn collision_capsules_ride_on_their_bodies_as_pinocchio_moves_them() {
+    use capp_sim::geometry::{collision_capsules, joint_frames};
+    for (file, csv) in [
+        ("panda_table.toml", "panda_fk.csv"),
+        ("ur5_table.toml", "ur5_fk.csv"),
+    ] {
+        let problem = Problem::load(&scenario(file)).unwrap();
+        let n = problem.joints.len();
+        let urdf = problem.urdf.as_ref().unwrap();
+        // Which body each capsule is on (0: the base).
+        let owner: Vec<usize> = urdf
+            .bodies
+            .iter()
+            .enumerate()
+            .flat_map(|(b, body)| std::iter::repeat_n(b, body.capsules.len()))
+            .collect();
+        assert!(owner.iter().filter(|&&b| b > 0).count() >= n, "{file}");
+        let rows = golden(csv);
+        let sub = |a: &[f64], b: &[f64]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let dot = |a: [f64; 3], b: &[f64]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let norm = |a: [f64; 3]| dot(a, &a).sqrt();
+        // Per capsule end: (distance to pivot k, to pivot k + 1, along axis k),
+        // or its world position for the base.
+        let mut first: Vec<[f64; 4]> = Vec::new();
+        let mut worst = 0.0f64;
+        for row in &rows {
+            let q = &row[..n];
+            let pivot = |k: usize| -> &[f64] {
+                match k < n {
+                    true => &row[n + 6 * k..n + 6 * k + 3],
+                    false => &row[7 * n..7 * n + 3],
+                }
+            };
+            let axis = |k: usize| &row[n + 6 * k + 3..n + 6 * k + 6];
+            // A direction fixed in body `b` other than its joint's axis: the
+            // next joint's axis, or the tip frame's x for the last body.
+            let across = |b: usize| -> [f64; 3] {
+                match b < n {
+                    true => [axis(b)[0], axis(b)[1], axis(b)[2]],
+                    false => [0, 1, 2].map(|i| row[7 * n + 3 + 3 * i]),
+                }
+            };
+            let frames = joint_frames(&problem.joints, q);
+            assert_eq!(frames.len(), n);
+            for (k, f) in frames.iter().enumerate() {
+                let local = problem.joints[k].origin.unwrap().axis.map(f64::from);
+                let world = [0, 1, 2].map(|i| (0..3).map(|j| f[i][j] * local[j]).sum::<f64>());
+                let unit = world.map(|x| x / norm(world));
+                for i in 0..3 {
+                    assert!((f[i][3] - pivot(k)[i]).abs() < 1e-6, "{file} pivot {k}");
+                    assert!((unit[i] - axis(k)[i]).abs() < 1e-6, "{file} axis {k}");
+                }
+            }
+            let capsules = collision_capsules(&problem, q);
+            assert_eq!(capsules.len(), owner.len(), "{file}");
+            let mut now = Vec::new();
+            for (c, &b) in capsules.iter().zip(&owner) {
+                for end in [&c[0..3], &c[3..6]] {
+                    now.push(match b {
+                        0 => [end[0], end[1], end[2], 0.0],
+                        _ => [
+                            norm(sub(end, pivot(b - 1))),
+                            norm(sub(end, pivot(b))),
+                            dot(sub(end, pivot(b - 1)), axis(b - 1)),
+                            dot(sub(end, pivot(b - 1)), &across(b)),
+                        ],
+                    });
+                }
+            }
+            if first.is_empty() {
+                first = now;
+            } else {
+                for (a, b) in first.iter().zip(&now) {
+                    for i in 0..4 {
+                        worst = worst.max((a[i] - b[i]).abs());
+                    }
+                }
+            }
+        }
+        assert!(
+            worst < 1e-5,
+            "{file}: capsules drift {worst} m off their bodies"
+        );
+    }
+}
+
+/// Pixels of `png` close to `colour` (within 40 per channel).
+fn pixels_like(png: &Path, colour: [u8; 3]) -> usize {
+    let file = std::fs::File::open(png).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    buf[..info.buffer_size()]
+        .chunks(channels)
+        .filter(|p| (0..3).all(|i| p[i].abs_diff(colour[i]) <= 40))
+        .count()
+}
+
+/// `capp robot SCENARIO --render DIR`: the pictures and the viewer of the
+/// robot at its start configuration. The Panda's picture has the fitted
+/// collision capsules in orange and the link capsules in teal, and its
+/// viewer carries one frame with every fitted capsule and opens with the
+/// capsules shown; PIPS (a DH table) has link capsules only. A folder that
+/// is not capp's is refused and left alone.
+#[test]
+fn capp_robot_render_draws_the_capsules() {
+    use capp_sim::render::robot::{COLLISION_CAPSULE, FILES, LINK_CAPSULE};
+    let scratch = tempfile::tempdir().unwrap();
+    let render = |file: &str, dir: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_capp"))
+            .args(["robot", scenario(file).to_str().unwrap(), "--render"])
+            .arg(dir)
+            .output()
+            .unwrap()
+    };
+    let panda = scratch.path().join("panda");
+    let o = render("panda_table.toml", &panda);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("pictures:"), "{text}");
+    for name in FILES.iter().chain(&["COMPLETE"]) {
+        assert!(panda.join(name).is_file(), "{name} missing");
+    }
+    let svg = std::fs::read_to_string(panda.join("robot.svg")).unwrap();
+    assert!(svg.contains("URDF collision capsules"), "legend");
+    let orange = pixels_like(&panda.join("robot.png"), COLLISION_CAPSULE);
+    let teal = pixels_like(&panda.join("robot.png"), LINK_CAPSULE);
+    assert!(orange > 5000 && teal > 1000, "orange {orange}, teal {teal}");
+
+    let problem = Problem::load(&scenario("panda_table.toml")).unwrap();
+    let fitted: usize = problem
+        .urdf
+        .as_ref()
+        .unwrap()
+        .bodies
+        .iter()
+        .map(|b| b.capsules.len())
+        .sum();
+    let html = std::fs::read_to_string(panda.join("viewer.html")).unwrap();
+    assert!(html.contains("\n\"capsules_shown\": true,"));
+    let list = html
+        .split("\n\"collision_capsules\": [[[")
+        .nth(1)
+        .expect("collision_capsules in the page")
+        .split("]],")
+        .next()
+        .unwrap();
+    // One frame: `[[c, c, ...]]`, each `c` seven numbers in brackets.
+    assert_eq!(list.matches("],[").count() + 1, fitted, "{list}");
+    assert!(
+        list.split("],[").all(|c| c.split(',').count() == 7),
+        "{list}"
+    );
+    assert!(html.contains("\n\"frames\": 1,"), "one frame");
+
+    let pips = scratch.path().join("pips");
+    let o = render("pips_payload_bay.toml", &pips);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(pixels_like(&pips.join("robot.png"), COLLISION_CAPSULE), 0);
+    assert!(pixels_like(&pips.join("robot.png"), LINK_CAPSULE) > 500);
+    let html = std::fs::read_to_string(pips.join("viewer.html")).unwrap();
+    assert!(html.contains("\n\"collision_capsules\": null,"));
+
+    // Rendering again replaces a finished folder; a foreign one is refused.
+    assert!(render("panda_table.toml", &panda).status.success());
+    let mine = scratch.path().join("mine");
+    std::fs::create_dir(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "keep").unwrap();
+    let o = render("panda_table.toml", &mine);
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("notes.txt")).unwrap(),
+        "keep"
+    );
+    assert!(!mine.join("robot.png").exists());
+}

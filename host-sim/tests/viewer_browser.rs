@@ -521,3 +521,69 @@ fn viewer_shows_each_joints_velocity_and_acceleration() {
     assert!(!dom.contains("<div class=\"bar velocity\""));
     assert!(!dom.contains("<td>largest |velocity| / rate limit</td>"));
 }
+
+/// `capp robot --render`'s viewer: the Panda at its start, one frame, the
+/// capsules shown without asking, the URDF's fitted collision capsules in
+/// the legend and drawn: against the same page without them, the 3-D view
+/// changes.
+#[test]
+fn robot_viewer_shows_the_fitted_collision_capsules() {
+    use capp_sim::render::robot::{render_robot, start};
+    use capp_sim::render::viewer::{viewer_with, ViewerOptions};
+    use capp_sim::trajectory::Trajectory;
+    let Some(exe) = chromium_or_skip("robot_viewer_shows_the_fitted_collision_capsules") else {
+        return;
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/panda_table.toml");
+    let problem = Problem::load(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    render_robot(&problem, dir.path()).unwrap();
+    let page = dir.path().join("viewer.html");
+    let out = browse(&exe, &page, &["--dump-dom".to_string()]);
+    let dom = &out.stdout;
+    assert!(dom.contains("<title>ok 1 frames</title>"), "{}", out.stderr);
+    let body = dom.split("<body").nth(1).unwrap_or("");
+    let body = body.split('>').next().unwrap_or("");
+    assert!(body.contains("data-capsules=\"shown\""), "{body}");
+    assert!(dom.contains("URDF collision capsules"), "legend");
+
+    let plain = dir.path().join("plain.html");
+    let options = ViewerOptions {
+        capsules_shown: true,
+        collision_capsules: false,
+    };
+    let still = Trajectory::still(&start(&problem));
+    std::fs::write(&plain, viewer_with(&problem, &still, options)).unwrap();
+    let shot = |page: &Path, name: &str| {
+        let shot = dir.path().join(name);
+        browse(
+            &exe,
+            page,
+            &[
+                "--window-size=1000,700".to_string(),
+                format!("--screenshot={}", shot.display()),
+            ],
+        );
+        let file = std::fs::File::open(&shot).unwrap();
+        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .unwrap();
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        let channels = info.color_type.samples();
+        let w = info.width as usize;
+        (0..info.height as usize)
+            .flat_map(|y| (360..w).map(move |x| (y * w + x) * channels))
+            .map(|i| [buf[i], buf[i + 1], buf[i + 2]])
+            .collect::<Vec<_>>()
+    };
+    let (with, without) = (shot(&page, "with.png"), shot(&plain, "without.png"));
+    assert_eq!(with.len(), without.len());
+    let changed = with
+        .iter()
+        .zip(&without)
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 12))
+        .count();
+    eprintln!("{changed} pixels change with the fitted capsules");
+    assert!(changed > 2000, "{changed} pixels changed");
+}

@@ -379,6 +379,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 base_link: imported.chain.base_link.clone(),
                 tip_link: imported.chain.tip_link.clone(),
                 bodies: imported.chain.bodies.clone(),
+                per_metre: per_inch / INCH_M,
             });
             (
                 imported.joints,

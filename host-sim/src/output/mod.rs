@@ -208,6 +208,26 @@ pub fn write_run(
     summary: &Summary,
     extra: impl FnOnce(&Path) -> Result<()>,
 ) -> Result<()> {
+    write_folder(dir, outcome_name(result.outcome), |staging| {
+        let n = problem.joints.len();
+        fs::write(staging.join("trajectory.csv"), rows_csv(n, &result.rows)?)?;
+        fs::write(
+            staging.join("setpoints.csv"),
+            rows_csv(n, result.setpoints())?,
+        )?;
+        fs::write(staging.join("joints.dat"), joints_dat(result.setpoints()))?;
+        fs::write(staging.join("summary.txt"), summary.to_string())?;
+        copy_scenario(problem, &staging.join(scenario_copy_name(problem)))?;
+        extra(staging)
+    })
+}
+
+/// Writes a capp output folder `dir`, atomically: `fill` writes the files
+/// into a sibling staging folder, then the [`COMPLETE_MARKER`] (holding
+/// `what`, a line) is written and the folder renamed onto `dir`. Refuses a
+/// `dir` that exists unless it is empty or a finished capp output folder
+/// (which is replaced).
+pub fn write_folder(dir: &Path, what: &str, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let parent = match dir.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
@@ -236,18 +256,9 @@ pub fn write_run(
     }
     fs::create_dir(&staging).with_context(|| format!("cannot create {}", staging.display()))?;
     let written = (|| -> Result<()> {
-        let n = problem.joints.len();
-        fs::write(staging.join("trajectory.csv"), rows_csv(n, &result.rows)?)?;
-        fs::write(
-            staging.join("setpoints.csv"),
-            rows_csv(n, result.setpoints())?,
-        )?;
-        fs::write(staging.join("joints.dat"), joints_dat(result.setpoints()))?;
-        fs::write(staging.join("summary.txt"), summary.to_string())?;
-        copy_scenario(problem, &staging.join(scenario_copy_name(problem)))?;
-        extra(&staging)?;
+        fill(&staging)?;
         let mut marker = String::new();
-        let _ = writeln!(marker, "{}", outcome_name(result.outcome));
+        let _ = writeln!(marker, "{what}");
         fs::write(staging.join(COMPLETE_MARKER), marker)?;
         Ok(())
     })();

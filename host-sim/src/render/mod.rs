@@ -8,6 +8,9 @@
 //! | `motion.gif` | the three views with the arm moving (for READMEs and reports) |
 //! | `animation.html` | the three views playing the motion as SVG (no WebGL needed) |
 //!
+//! `capp robot --render` draws the robot at its start configuration instead
+//! ([`robot`]: `robot.svg`, `robot.png`, `viewer.html`).
+//!
 //! [`canvas`] is the scene list behind the SVG / PNG pairs; [`chart`] draws
 //! labelled axes and ready-made bar and scatter figures for reports.
 
@@ -17,6 +20,7 @@ pub mod chart;
 pub mod font;
 pub mod motion_gif;
 pub mod plots;
+pub mod robot;
 pub mod viewer;
 pub mod views;
 

@@ -34,7 +34,13 @@
 //! `null` when no pair is checked). The page draws the capsules as
 //! see-through tubes with round ends, the closest checked pair in red,
 //! behind a checkbox (off when the page opens; `c` toggles it,
-//! `viewer.html#capsules` opens with them shown).
+//! `viewer.html#capsules` opens with them shown; `capsules_shown`: the
+//! page opens with them shown whatever the URL says).
+//!
+//! `collision_capsules` (`null` unless asked for, [`ViewerOptions`]): per
+//! frame, a URDF robot's fitted collision capsules in world coordinates,
+//! each `[ax, ay, az, bx, by, bz, r]` ([`collision_capsules`]), drawn
+//! in orange with the link capsules (same checkbox).
 
 use std::fmt::Write as _;
 
@@ -42,7 +48,7 @@ use super::canvas::escape;
 use super::chart::nice_step;
 use super::views::{bounds, escape_color, frames, origins, surface};
 use crate::escapes::{classify, side_name, Kind};
-use crate::geometry::{forward, Geometry};
+use crate::geometry::{collision_capsules, forward, Geometry};
 use crate::problem::Problem;
 use crate::trajectory::{Trajectory, TrajectoryRow};
 
@@ -53,6 +59,15 @@ const LON: usize = 64;
 
 static THREE_JS: &str = include_str!("../../assets/three.min.js");
 static VIEWER_JS: &str = include_str!("../../assets/viewer.js");
+
+/// What a page shows beyond a run's (the default: a run's page).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ViewerOptions {
+    /// Open with the link capsules shown (as `viewer.html#capsules`).
+    pub capsules_shown: bool,
+    /// A URDF robot's fitted collision capsules, per frame.
+    pub collision_capsules: bool,
+}
 
 /// A JSON number, or `null` for a missing or non-finite value.
 fn num(v: Option<f64>, out: &mut String) {
@@ -174,8 +189,35 @@ fn fractions(
     list(flat)
 }
 
-/// The `RUN` object.
+/// Per picked row, the robot's fitted collision capsules as
+/// `[ax,ay,az,bx,by,bz,r]` lists, to 6 decimals (the page draws them; a
+/// test checks them against the link capsules); `null` for a robot without
+/// a URDF.
+fn collision_json(problem: &Problem, t: &Trajectory, picks: &[usize]) -> String {
+    if problem.urdf.is_none() {
+        return "null".into();
+    }
+    let fine = |v: f64| format!("{}", (v * 1e6).round() / 1e6);
+    let frames: Vec<String> = picks
+        .iter()
+        .map(|&k| {
+            let capsules: Vec<String> = collision_capsules(problem, &t.rows[k].q)
+                .iter()
+                .map(|c| format!("[{}]", c.map(fine).join(",")))
+                .collect();
+            format!("[{}]", capsules.join(","))
+        })
+        .collect();
+    format!("[{}]", frames.join(","))
+}
+
+/// The `RUN` object of a run's page.
 pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
+    run_json_with(problem, t, ViewerOptions::default())
+}
+
+/// The `RUN` object, with `options`.
+pub fn run_json_with(problem: &Problem, t: &Trajectory, options: ViewerOptions) -> String {
     let origins = origins(problem, t);
     let (centre, side) = bounds(problem, &origins);
     let escapes = t.escapes();
@@ -325,6 +367,12 @@ pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
         list(problem.links.radius.iter().map(|&r| Some(r as f64)))
     );
     let _ = writeln!(s, "\"self_collision\": {},", problem.links.enabled);
+    let _ = writeln!(s, "\"capsules_shown\": {},", options.capsules_shown);
+    let collision = match options.collision_capsules {
+        true => collision_json(problem, t, &picks),
+        false => "null".into(),
+    };
+    let _ = writeln!(s, "\"collision_capsules\": {collision},");
     let shown: Vec<&[[f64; 3]]> = picks.iter().map(|&k| origins[k].as_slice()).collect();
     let pairs: Vec<String> = closest_links(problem, &shown)
         .into_iter()
@@ -383,8 +431,13 @@ pub fn run_json(problem: &Problem, t: &Trajectory) -> String {
     s
 }
 
-/// The page.
+/// A run's page.
 pub fn viewer(problem: &Problem, t: &Trajectory) -> String {
+    viewer_with(problem, t, ViewerOptions::default())
+}
+
+/// The page, with `options`.
+pub fn viewer_with(problem: &Problem, t: &Trajectory, options: ViewerOptions) -> String {
     format!(
         r#"<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
@@ -448,7 +501,7 @@ const RUN = {run};
 "#,
         name = escape(&problem.name),
         three = THREE_JS.trim_end(),
-        run = run_json(problem, t),
+        run = run_json_with(problem, t, options),
         viewer = VIEWER_JS.trim_end(),
     )
 }

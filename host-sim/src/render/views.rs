@@ -315,9 +315,11 @@ pub fn frames(origins: &[Vec<[f64; 3]>], count: usize) -> Vec<usize> {
     out
 }
 
-const LEFT: f64 = 58.0;
+/// Left margin of the first panel, pixels.
+pub const LEFT: f64 = 58.0;
 const GAP: f64 = 72.0;
-const TOP: f64 = 74.0;
+/// Top of the panels, pixels.
+pub const TOP: f64 = 74.0;
 const BOTTOM: f64 = 80.0;
 
 /// The three views, each `panel` pixels square; the arm at `snapshots`
@@ -325,23 +327,10 @@ const BOTTOM: f64 = 80.0;
 pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize) -> ArmScene {
     let origins = origins(problem, t);
     let (centre, side) = bounds(problem, &origins);
-    let scale = panel / side;
-    let axes = [(0, 1), (0, 2), (1, 2)];
-    let panels = [0, 1, 2].map(|i| Panel {
-        axes: axes[i],
-        origin: (LEFT + i as f64 * (panel + GAP), TOP),
-        size: panel,
-        lo: (
-            centre[axes[i].0] - side / 2.0,
-            centre[axes[i].1] - side / 2.0,
-        ),
-        scale,
-    });
+    let panels = panels(centre, side, panel);
     let escapes = t.escapes();
-    let width = (LEFT + 3.0 * panel + 2.0 * GAP + 24.0) as u32;
     let legend_rows = if escapes.is_empty() { 0.0 } else { 20.0 };
-    let height = (TOP + panel + BOTTOM + legend_rows) as u32;
-    let mut canvas = Canvas::new(width, height);
+    let mut canvas = page(panel, legend_rows);
     let unit = &problem.length_unit;
     let headline = if snapshots > 0 {
         format!(
@@ -353,92 +342,22 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
         format!("{}: {} steps", problem.name, t.rows.len().saturating_sub(1))
     };
     canvas.push(Shape::text((LEFT, 26.0), 16.0, headline).colored(INK));
-    let unit_name = match unit.as_str() {
-        "in" => "inches",
-        "m" => "metres",
-        other => other,
-    };
+    let unit_name = unit_name(unit);
     let subtitle = if snapshots > 0 {
         format!("orthographic views, lengths in {unit_name}; grey: obstacles (true surfaces, not inflated by the clearance margins)")
     } else {
         format!("orthographic views, lengths in {unit_name}")
     };
     canvas.push(Shape::text((LEFT, 46.0), 11.5, subtitle).colored(MUTED));
-    let names = ["x", "y", "z"];
-    let titles = ["top (from +z)", "front (from −y)", "side (from +x)"];
-    let surfaces: Vec<Vec<[f64; 3]>> = (0..problem.obstacles.len())
-        .map(|o| surface(problem, o, 24, 48))
-        .collect();
+    let surfaces = surfaces(problem);
     let instants = if snapshots > 0 {
         instants(&origins, snapshots)
     } else {
         Vec::new()
     };
-    let step = nice_step(side, 5.0);
     for (pi, p) in panels.iter().enumerate() {
-        let (x0, y0, x1, y1) = p.clip();
-        // Grid and ticks in world units.
-        for horizontal in [true, false] {
-            let lo = if horizontal { p.lo.0 } else { p.lo.1 };
-            let mut k = (lo / step).ceil() as i64;
-            while (k as f64) * step <= lo + side + 1e-9 {
-                let v = k as f64 * step;
-                let px = (v - lo) * scale;
-                let label = tick_label(v, step);
-                if horizontal {
-                    let x = x0 + px;
-                    canvas.push(Shape::line(vec![(x, y0), (x, y1)], [236, 236, 236], 1.0));
-                    canvas.push(Shape::line(vec![(x, y1), (x, y1 + 4.0)], INK, 1.0));
-                    canvas.push(
-                        Shape::text((x, y1 + 16.0), 10.5, label)
-                            .anchored(Anchor::Middle)
-                            .colored(INK),
-                    );
-                } else {
-                    let y = y1 - px;
-                    canvas.push(Shape::line(vec![(x0, y), (x1, y)], [236, 236, 236], 1.0));
-                    canvas.push(Shape::line(vec![(x0 - 4.0, y), (x0, y)], INK, 1.0));
-                    canvas.push(
-                        Shape::text((x0 - 7.0, y + 4.0), 10.5, label)
-                            .anchored(Anchor::End)
-                            .colored(INK),
-                    );
-                }
-                k += 1;
-            }
-        }
-        canvas.push(
-            Shape::text(
-                ((x0 + x1) / 2.0, y1 + 33.0),
-                11.5,
-                format!("{} [{unit}]", names[p.axes.0]),
-            )
-            .anchored(Anchor::Middle)
-            .colored(MUTED),
-        );
-        canvas.push(
-            Shape::text(
-                (x0 - 7.0, y0 - 9.0),
-                11.5,
-                format!("{} [{unit}]", names[p.axes.1]),
-            )
-            .anchored(Anchor::End)
-            .colored(MUTED),
-        );
-        canvas.push(Shape::text((x0, y0 - 9.0), 13.0, titles[pi]).colored(INK));
-
-        let hulls: Vec<Vec<P2>> = surfaces
-            .iter()
-            .map(|s| hull(s.iter().map(|q| p.map(q)).collect()))
-            .collect();
-        for h in &hulls {
-            canvas.push(Shape::Polygon {
-                points: h.clone(),
-                fill: OBSTACLE,
-                opacity: 0.35,
-                clip: Some(p.clip()),
-            });
-        }
+        panel_frame(&mut canvas, p, TITLES[pi], side, unit);
+        let hulls = silhouettes(&mut canvas, p, &surfaces);
         // End-effector path, at most ~2000 points.
         let stride = (origins.len() / 2000).max(1);
         let path: Vec<P2> = origins
@@ -497,28 +416,8 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
                 color: TARGET,
             });
         }
-        let mut placed: Vec<P2> = Vec::new();
-        for (o, h) in hulls.iter().enumerate() {
-            let name = problem
-                .obstacle_names
-                .get(o)
-                .filter(|n| !n.is_empty())
-                .cloned()
-                .unwrap_or_else(|| format!("obstacle {}", o + 1));
-            if let Some(at) = label_spot(h, p.clip(), &name, &avoid, &placed) {
-                placed.push(at);
-                canvas.push(
-                    Shape::text(at, 11.0, name)
-                        .anchored(Anchor::Middle)
-                        .colored([45, 50, 60]),
-                );
-            }
-        }
-        canvas.push(Shape::line(
-            vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)],
-            [130, 130, 130],
-            1.0,
-        ));
+        obstacle_names(&mut canvas, problem, p, &hulls, &avoid);
+        border(&mut canvas, p);
     }
     legend(&mut canvas, (LEFT, TOP + panel + 60.0), snapshots, &escapes);
     ArmScene {
@@ -526,6 +425,173 @@ pub fn arm_scene(problem: &Problem, t: &Trajectory, panel: f64, snapshots: usize
         panels,
         origins,
     }
+}
+
+/// Titles of the three panels.
+pub const TITLES: [&str; 3] = ["top (from +z)", "front (from −y)", "side (from +x)"];
+
+/// The three panels (top, front, side), each `panel` pixels square,
+/// showing a cube of `side` length units round `centre`.
+pub fn panels(centre: [f64; 3], side: f64, panel: f64) -> [Panel; 3] {
+    let axes = [(0, 1), (0, 2), (1, 2)];
+    [0, 1, 2].map(|i| Panel {
+        axes: axes[i],
+        origin: (LEFT + i as f64 * (panel + GAP), TOP),
+        size: panel,
+        lo: (
+            centre[axes[i].0] - side / 2.0,
+            centre[axes[i].1] - side / 2.0,
+        ),
+        scale: panel / side,
+    })
+}
+
+/// An empty page for three `panel`-pixel panels, their titles, ticks and a
+/// legend with `legend_rows` pixels of extra rows.
+pub fn page(panel: f64, legend_rows: f64) -> Canvas {
+    let width = (LEFT + 3.0 * panel + 2.0 * GAP + 24.0) as u32;
+    let height = (TOP + panel + BOTTOM + legend_rows) as u32;
+    Canvas::new(width, height)
+}
+
+/// The length unit in words, for subtitles.
+pub fn unit_name(unit: &str) -> &str {
+    match unit {
+        "in" => "inches",
+        "m" => "metres",
+        other => other,
+    }
+}
+
+/// Surface samples of every obstacle ([`surface`], 24 x 48).
+pub fn surfaces(problem: &Problem) -> Vec<Vec<[f64; 3]>> {
+    (0..problem.obstacles.len())
+        .map(|o| surface(problem, o, 24, 48))
+        .collect()
+}
+
+/// Panel `p`'s grid and ticks every round step of its `side` (length
+/// units), axis names in `unit`, and its title.
+pub fn panel_frame(canvas: &mut Canvas, p: &Panel, title: &str, side: f64, unit: &str) {
+    let names = ["x", "y", "z"];
+    let step = nice_step(side, 5.0);
+    let (x0, y0, x1, y1) = p.clip();
+    for horizontal in [true, false] {
+        let lo = if horizontal { p.lo.0 } else { p.lo.1 };
+        let mut k = (lo / step).ceil() as i64;
+        while (k as f64) * step <= lo + side + 1e-9 {
+            let v = k as f64 * step;
+            let px = (v - lo) * p.scale;
+            let label = tick_label(v, step);
+            if horizontal {
+                let x = x0 + px;
+                canvas.push(Shape::line(vec![(x, y0), (x, y1)], [236, 236, 236], 1.0));
+                canvas.push(Shape::line(vec![(x, y1), (x, y1 + 4.0)], INK, 1.0));
+                canvas.push(
+                    Shape::text((x, y1 + 16.0), 10.5, label)
+                        .anchored(Anchor::Middle)
+                        .colored(INK),
+                );
+            } else {
+                let y = y1 - px;
+                canvas.push(Shape::line(vec![(x0, y), (x1, y)], [236, 236, 236], 1.0));
+                canvas.push(Shape::line(vec![(x0 - 4.0, y), (x0, y)], INK, 1.0));
+                canvas.push(
+                    Shape::text((x0 - 7.0, y + 4.0), 10.5, label)
+                        .anchored(Anchor::End)
+                        .colored(INK),
+                );
+            }
+            k += 1;
+        }
+    }
+    canvas.push(
+        Shape::text(
+            ((x0 + x1) / 2.0, y1 + 33.0),
+            11.5,
+            format!("{} [{unit}]", names[p.axes.0]),
+        )
+        .anchored(Anchor::Middle)
+        .colored(MUTED),
+    );
+    canvas.push(
+        Shape::text(
+            (x0 - 7.0, y0 - 9.0),
+            11.5,
+            format!("{} [{unit}]", names[p.axes.1]),
+        )
+        .anchored(Anchor::End)
+        .colored(MUTED),
+    );
+    canvas.push(Shape::text((x0, y0 - 9.0), 13.0, title).colored(INK));
+}
+
+/// The obstacles' silhouettes in panel `p`, drawn; returned for their names.
+pub fn silhouettes(canvas: &mut Canvas, p: &Panel, surfaces: &[Vec<[f64; 3]>]) -> Vec<Vec<P2>> {
+    let hulls: Vec<Vec<P2>> = surfaces
+        .iter()
+        .map(|s| hull(s.iter().map(|q| p.map(q)).collect()))
+        .collect();
+    for h in &hulls {
+        canvas.push(Shape::Polygon {
+            points: h.clone(),
+            fill: OBSTACLE,
+            opacity: 0.35,
+            clip: Some(p.clip()),
+        });
+    }
+    hulls
+}
+
+/// Each obstacle's name inside its silhouette (`hulls`), away from the
+/// pixels in `avoid` and from each other.
+pub fn obstacle_names(
+    canvas: &mut Canvas,
+    problem: &Problem,
+    p: &Panel,
+    hulls: &[Vec<P2>],
+    avoid: &[P2],
+) {
+    let mut placed: Vec<P2> = Vec::new();
+    for (o, h) in hulls.iter().enumerate() {
+        let name = problem
+            .obstacle_names
+            .get(o)
+            .filter(|n| !n.is_empty())
+            .cloned()
+            .unwrap_or_else(|| format!("obstacle {}", o + 1));
+        if let Some(at) = label_spot(h, p.clip(), &name, avoid, &placed) {
+            placed.push(at);
+            canvas.push(
+                Shape::text(at, 11.0, name)
+                    .anchored(Anchor::Middle)
+                    .colored([45, 50, 60]),
+            );
+        }
+    }
+}
+
+/// Panel `p`'s border.
+pub fn border(canvas: &mut Canvas, p: &Panel) {
+    let (x0, y0, x1, y1) = p.clip();
+    canvas.push(Shape::line(
+        vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)],
+        [130, 130, 130],
+        1.0,
+    ));
+}
+
+/// The outline of a capsule (the segment `a`-`b`, `radius` length units)
+/// as panel `p` projects it: the hull of a circle round each end.
+pub fn capsule_outline(p: &Panel, a: &[f64; 3], b: &[f64; 3], radius: f64) -> Vec<P2> {
+    let r = radius * p.scale;
+    let ring = |c: P2| {
+        (0..32).map(move |i| {
+            let th = std::f64::consts::TAU * i as f64 / 32.0;
+            (c.0 + r * th.cos(), c.1 + r * th.sin())
+        })
+    };
+    hull(ring(p.map(a)).chain(ring(p.map(b))).collect())
 }
 
 /// Where to write an obstacle's name inside its silhouette: the centre of a
