@@ -9,7 +9,7 @@
 //!
 //! About 80 flops a joint; the DH pass is about 40.
 
-use super::Frames;
+use super::frames::Frames;
 use crate::math::{sin_cos, Mat3, Vec3};
 use crate::robot::{JointKind, Robot};
 
