@@ -454,15 +454,9 @@ fn collision_capsules_ride_on_their_bodies_as_pinocchio_moves_them() {
 
 /// Pixels of `png` close to `colour` (within 40 per channel).
 fn pixels_like(png: &Path, colour: [u8; 3]) -> usize {
-    let file = std::fs::File::open(png).unwrap();
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let channels = info.color_type.samples();
-    buf[..info.buffer_size()]
-        .chunks(channels)
+    common::png_rgb(png)
+        .1
+        .iter()
         .filter(|p| (0..3).all(|i| p[i].abs_diff(colour[i]) <= 40))
         .count()
 }

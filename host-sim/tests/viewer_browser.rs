@@ -172,18 +172,9 @@ fn viewer_draws_in_a_real_browser() {
         "no screenshot; browser stderr:\n{}",
         out.stderr
     );
-    let file = std::fs::File::open(&shot).unwrap();
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let channels = info.color_type.samples();
-    let (w, h) = (info.width as usize, info.height as usize);
-    let px = |x: usize, y: usize| {
-        let i = (y * w + x) * channels;
-        [buf[i], buf[i + 1], buf[i + 2]]
-    };
+    let (w, pixels) = common::png_rgb(&shot);
+    let h = pixels.len() / w;
+    let px = |x: usize, y: usize| pixels[y * w + x];
     let background = [0xf4, 0xf6, 0xf9];
     let (mut drawn, mut orange, mut colours) = (0, 0, std::collections::HashSet::new());
     for y in 0..h {
@@ -298,22 +289,7 @@ fn viewer_shows_and_hides_the_link_capsules() {
             "no screenshot; browser stderr:\n{}",
             out.stderr
         );
-        let file = std::fs::File::open(&shot).unwrap();
-        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-            .read_info()
-            .unwrap();
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        let channels = info.color_type.samples();
-        let (w, h) = (info.width as usize, info.height as usize);
-        let mut px = Vec::with_capacity(w * h);
-        for y in 0..h {
-            for x in 360..w {
-                let i = (y * w + x) * channels;
-                px.push([buf[i], buf[i + 1], buf[i + 2]]);
-            }
-        }
-        px
+        right_of_panel(&shot)
     };
     let (off, on) = (
         shot("#frame=0", "hidden.png"),
@@ -327,6 +303,16 @@ fn viewer_shows_and_hides_the_link_capsules() {
         .count();
     eprintln!("{changed} pixels change when the capsules are shown");
     assert!(changed > 2000, "{changed} pixels changed");
+}
+
+/// A screenshot's pixels right of the side panel (x >= 360), row by row:
+/// the 3-D view.
+fn right_of_panel(shot: &Path) -> Vec<[u8; 3]> {
+    let (w, pixels) = common::png_rgb(shot);
+    pixels
+        .chunks(w)
+        .flat_map(|row| row[360..].iter().copied())
+        .collect()
 }
 
 /// A JSON list of numbers (or `null`s) named `key` in the page's `RUN`.
@@ -564,18 +550,7 @@ fn robot_viewer_shows_the_fitted_collision_capsules() {
                 format!("--screenshot={}", shot.display()),
             ],
         );
-        let file = std::fs::File::open(&shot).unwrap();
-        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-            .read_info()
-            .unwrap();
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        let channels = info.color_type.samples();
-        let w = info.width as usize;
-        (0..info.height as usize)
-            .flat_map(|y| (360..w).map(move |x| (y * w + x) * channels))
-            .map(|i| [buf[i], buf[i + 1], buf[i + 2]])
-            .collect::<Vec<_>>()
+        right_of_panel(&shot)
     };
     let (with, without) = (shot(&page, "with.png"), shot(&plain, "without.png"));
     assert_eq!(with.len(), without.len());

@@ -79,3 +79,21 @@ pub fn planned(path: &Path) -> (Problem, Trajectory) {
     let t = trajectory::parse(&csv, Path::new("trajectory.csv")).unwrap();
     (problem, t)
 }
+
+/// A PNG file's width and its pixels as RGB, row by row (RGB or RGBA files:
+/// alpha, if any, dropped).
+pub fn png_rgb(path: &Path) -> (usize, Vec<[u8; 3]>) {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    assert!(channels >= 3, "{}: not RGB", path.display());
+    let pixels = buf[..info.buffer_size()]
+        .chunks(channels)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    (info.width as usize, pixels)
+}
