@@ -123,8 +123,12 @@ pub struct UrdfSource {
     pub tip_link: String,
     /// Per rigid body, metres: `bodies[0]` on the base, `bodies[k + 1]`
     /// moved by joint `k`, each with its links and fitted capsules in its
-    /// own frame.
+    /// own frame (its pivot slid as [`UrdfSource::pivot_slide`] says).
     pub bodies: Vec<capp_urdf::Body>,
+    /// How far each joint's pivot was slid along its unit axis from the
+    /// URDF's joint origin, metres (`input::pivots`): the joints' origins
+    /// and the bodies are given in the slid frames.
+    pub pivot_slide: Vec<f64>,
     /// The scenario's length units per metre (`bodies` times this is in
     /// the scenario's units).
     pub per_metre: f64,

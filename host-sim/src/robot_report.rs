@@ -89,10 +89,17 @@ pub fn report(problem: &Problem) -> Result<String, LoadError> {
             j.max_rate,
             j.weight
         );
+        let slide = problem
+            .urdf
+            .as_ref()
+            .and_then(|u| u.pivot_slide.get(k))
+            .filter(|s| **s != 0.0)
+            .map(|s| format!("  (pivot slid {s:+.4} m along the axis from the URDF's origin)"))
+            .unwrap_or_default();
         let _ = match j.origin {
             Some(o) => writeln!(
                 out,
-                "     origin {}  axis {}",
+                "     origin {}  axis {}{slide}",
                 placement(&o.placement),
                 xyz(o.axis.map(f64::from))
             ),

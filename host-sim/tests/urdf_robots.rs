@@ -48,6 +48,9 @@ fn matches_pinocchio(file: &str, csv: &str) {
     let (mut worst_m, mut worst_rad) = (0.0f64, 0.0f64);
     let rows = golden(csv);
     assert_eq!(rows.len(), 100);
+    let urdf = problem.urdf.as_ref().unwrap();
+    let (slides, per_metre) = (&urdf.pivot_slide, urdf.per_metre);
+    assert!(slides.iter().any(|s| s.abs() > 1e-3), "{file}: {slides:?}");
     for row in &rows {
         let q64 = &row[..n];
         let q: Vec<f32> = q64.iter().map(|&x| x as f32).collect();
@@ -57,13 +60,14 @@ fn matches_pinocchio(file: &str, csv: &str) {
             let at = n + 6 * k;
             let pivot = frames.pivot(k);
             let axis = frames.axis(k);
+            // Pinocchio's joint origin, slid along its axis as the loader
+            // slid it (`input::pivots`).
+            let slide = slides[k] * per_metre;
             for i in 0..3 {
-                worst_m = worst_m.max((pivot[i] as f64 - row[at + i]).abs());
+                let expect = row[at + i] + slide * row[at + 3 + i];
+                worst_m = worst_m.max((pivot[i] as f64 - expect).abs());
                 worst_rad = worst_rad.max((axis[i] as f64 - row[at + 3 + i]).abs());
-                assert!(
-                    (point[i] - row[at + i]).abs() < 1e-6,
-                    "{file} f64 pivot {k}"
-                );
+                assert!((point[i] - expect).abs() < 1e-6, "{file} f64 pivot {k}");
             }
         }
         let at = 7 * n;
@@ -113,6 +117,68 @@ fn urdf_scenarios_plan_to_their_targets_and_the_checker_accepts() {
             "{file}: {report}"
         );
     }
+}
+
+/// `slide_pivots = false` keeps the URDF's joint origins (the pivots are
+/// Pinocchio's); by default the Panda's column between joints 1 and 2, a
+/// chord of no length at the URDF's origins, gets a chord through it and a
+/// capsule of the column's own radius, and more link pairs are checked
+/// because fewer touch at home. The key goes with `urdf` only.
+#[test]
+fn pivots_slide_along_their_axes_unless_told_not_to() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scenario("panda_table.toml"))
+        .unwrap()
+        .replace("../../robots", &repo().join("robots").display().to_string());
+    let kept = text.replace(
+        "tip_link = \"panda_link8\"",
+        "tip_link = \"panda_link8\"\nslide_pivots = false",
+    );
+    assert_ne!(kept, text);
+    let (slid_path, kept_path) = (dir.path().join("slid.toml"), dir.path().join("kept.toml"));
+    std::fs::write(&slid_path, &text).unwrap();
+    std::fs::write(&kept_path, &kept).unwrap();
+    let slid = Problem::load(&slid_path).unwrap();
+    let kept = Problem::load(&kept_path).unwrap();
+    assert!(kept
+        .urdf
+        .as_ref()
+        .unwrap()
+        .pivot_slide
+        .iter()
+        .all(|&s| s == 0.0));
+    let rows = golden("panda_fk.csv");
+    let mut frames = Frames::<MAX_JOINTS>::default();
+    let robot = kept.robot().unwrap();
+    let q: Vec<f32> = rows[0][..7].iter().map(|&x| x as f32).collect();
+    forward_kinematics(&robot, &q, &mut frames);
+    for k in 0..7 {
+        for i in 0..3 {
+            assert!((frames.pivot(k)[i] as f64 - rows[0][7 + 6 * k + i]).abs() < 1e-5);
+        }
+    }
+    let (r_slid, r_kept) = (slid.links.radius[0], kept.links.radius[0]);
+    assert!((r_slid - 0.09).abs() < 1e-4, "{r_slid}");
+    assert!(r_kept > 0.4, "{r_kept}");
+    let pairs = |p: &Problem| p.scenario().unwrap().capsules().checked_count();
+    assert!(
+        pairs(&slid) > pairs(&kept),
+        "{} vs {}",
+        pairs(&slid),
+        pairs(&kept)
+    );
+
+    let dh = std::fs::read_to_string(scenario("planar_arm.toml"))
+        .unwrap()
+        .replacen(
+            "[[robot.joints]]",
+            "[robot]\nslide_pivots = true\n\n[[robot.joints]]",
+            1,
+        );
+    let path = dir.path().join("dh.toml");
+    std::fs::write(&path, dh).unwrap();
+    let e = Problem::load(&path).unwrap_err().to_string();
+    assert!(e.contains("`slide_pivots` go with `urdf`"), "{e}");
 }
 
 #[test]
@@ -330,8 +396,14 @@ fn capp_robot_prints_the_chain_limits_and_capsules() {
         text.contains("base_link -> tool0: 6 moving joints"),
         "{text}"
     );
+    // Its pivot slid along its axis (y) so that the upper arm's chord runs
+    // through the upper arm: the URDF's xyz 0 0.1358 0 plus the slide.
     assert!(
-        text.contains("origin xyz 0.0000 0.1358 0.0000  rpy 0.0000 1.5708"),
+        text.contains("origin xyz 0.0000 0.2828 0.0090  rpy 0.0000 1.5708"),
+        "{text}"
+    );
+    assert!(
+        text.contains("(pivot slid +0.1470 m along the axis from the URDF's origin)"),
         "{text}"
     );
     assert!(
@@ -341,7 +413,8 @@ fn capp_robot_prints_the_chain_limits_and_capsules() {
         "{text}"
     );
     assert!(
-        text.contains("tool (the tip's frame in the last joint's): xyz 0.0000 0.0823 0.0000"),
+        // The URDF's 0.0823 less wrist_3's slide of 0.0074 along y.
+        text.contains("tool (the tip's frame in the last joint's): xyz 0.0000 0.0749 0.0000"),
         "{text}"
     );
     assert!(text.contains("URDF links forearm_link:"), "{text}");
@@ -414,8 +487,11 @@ fn collision_capsules_ride_on_their_bodies_as_pinocchio_moves_them() {
                 let local = problem.joints[k].origin.unwrap().axis.map(f64::from);
                 let world = [0, 1, 2].map(|i| (0..3).map(|j| f[i][j] * local[j]).sum::<f64>());
                 let unit = world.map(|x| x / norm(world));
+                // The loader slid each pivot along its axis (`input::pivots`).
+                let slide = urdf.pivot_slide[k] * urdf.per_metre;
                 for i in 0..3 {
-                    assert!((f[i][3] - pivot(k)[i]).abs() < 1e-6, "{file} pivot {k}");
+                    let expect = pivot(k)[i] + slide * axis(k)[i];
+                    assert!((f[i][3] - expect).abs() < 1e-6, "{file} pivot {k}");
                     assert!((unit[i] - axis(k)[i]).abs() < 1e-6, "{file} axis {k}");
                 }
             }

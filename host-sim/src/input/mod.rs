@@ -6,6 +6,7 @@
 //! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
 //! | [`legacy`] | CAPP.c's `input.dat` (and writes its `joints.dat` records) |
 //! | [`urdf`] | a scenario's `[robot] urdf = "..."`: a URDF robot as general joints |
+//! | [`pivots`] | where a URDF joint's pivot sits on its axis, so each link's chord runs through its body |
 //!
 //! [`Problem::load`] picks the reader by the file's extension ([`is_toml`])
 //! and validates what it read. The types both readers produce ([`Problem`],
@@ -13,6 +14,7 @@
 //! which knows nothing of either format.
 
 pub mod legacy;
+pub mod pivots;
 pub mod scenario_file;
 pub mod urdf;
 

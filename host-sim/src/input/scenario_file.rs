@@ -89,6 +89,9 @@ struct RobotSpec {
     /// Directories holding ROS packages, relative to the scenario file.
     #[serde(default)]
     package_dirs: Vec<String>,
+    /// Whether each URDF joint's pivot is slid along its axis so the
+    /// links' chords run through their bodies (default true).
+    slide_pivots: Option<bool>,
     #[serde(default)]
     overrides: Vec<Spanned<OverrideSpec>>,
     /// Capsule radius of every link without its own `radius`, length units.
@@ -340,12 +343,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     if robot.urdf.is_none()
         && (robot.base_link.is_some()
             || robot.tip_link.is_some()
+            || robot.slide_pivots.is_some()
             || !robot.packages.is_empty()
             || !robot.package_dirs.is_empty())
     {
         return Err(err(
             robot_line,
-            "robot: `base_link`, `tip_link`, `packages` and `package_dirs` go with `urdf`".into(),
+            "robot: `base_link`, `tip_link`, `packages`, `package_dirs` and `slide_pivots` go with `urdf`".into(),
         ));
     }
     let mut tool = capp_core::robot::Placement::IDENTITY;
@@ -366,8 +370,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 package_dirs: robot.package_dirs.iter().map(|d| here.join(d)).collect(),
                 capsules_per_mesh: capp_urdf::CapsuleCount::Auto,
             };
-            let imported = super::urdf::import(&here.join(file), &options, per_inch / INCH_M)
-                .map_err(|e| err(robot_line, format!("robot.urdf: {e}")))?;
+            let imported = super::urdf::import(
+                &here.join(file),
+                &options,
+                per_inch / INCH_M,
+                robot.slide_pivots.unwrap_or(true),
+            )
+            .map_err(|e| err(robot_line, format!("robot.urdf: {e}")))?;
             let n = imported.joints.len();
             radii = imported.radii;
             drive_given = vec![[None; 2]; n];
@@ -379,6 +388,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 base_link: imported.chain.base_link.clone(),
                 tip_link: imported.chain.tip_link.clone(),
                 bodies: imported.chain.bodies.clone(),
+                pivot_slide: imported.pivot_slide.clone(),
                 per_metre: per_inch / INCH_M,
             });
             (

@@ -12,26 +12,37 @@
 //!   planner does not wrap angles. A prismatic joint without finite limits,
 //!   or any joint without a `<limit velocity>`, must be completed by a
 //!   `[[robot.overrides]]` entry ([`missing_fields`] names what is missing).
+//! - Pivots: each revolute joint's frame is slid along its own axis
+//!   ([`super::pivots`]) so that each link's chord, from its joint's pivot
+//!   to the next, runs through the link's body; no body, axis or the tip
+//!   moves, in any configuration. The joints, the tool and the bodies'
+//!   capsules are given in the slid frames.
 //! - Self-collision: each link's `<collision>` geometry (primitives, or STL,
 //!   OBJ, Collada meshes fitted with capsules by `capp-urdf`) is enclosed in
 //!   one capsule around the link's chord, the segment the core checks
-//!   ([`enclosing_radius`]). The base's own geometry is not checked: the
-//!   core has no link before the first joint.
+//!   ([`super::pivots::enclosing_radius`]). The base's own geometry is not
+//!   checked: the core has no link before the first joint.
 
 use std::path::Path;
 
+use super::pivots::enclosing_radius;
 use capp_core::robot::{JointOrigin, Placement};
 use capp_core::{Joint, JointKind};
-use capp_urdf::{Body, Chain, LoadOptions, UrdfError};
-use nalgebra::{Isometry3, Point3, Vector3};
+use capp_urdf::{Chain, LoadOptions, UrdfError};
+use nalgebra::{Isometry3, Point3};
 
 /// A continuous joint's range each way from zero, radians: one turn.
 pub const CONTINUOUS_RANGE_RAD: f64 = 2.0 * std::f64::consts::PI;
 
 /// A robot read from a URDF file, in the scenario's length unit.
 pub struct UrdfRobot {
-    /// The chain as `capp-urdf` read it (metres).
+    /// The chain as `capp-urdf` read it (metres), its pivots slid
+    /// ([`UrdfRobot::pivot_slide`]): its joints, tool and bodies are in the
+    /// frames the planner uses.
     pub chain: Chain,
+    /// How far each joint's pivot was slid along its unit axis from the
+    /// URDF's joint origin, metres ([`super::pivots`]).
+    pub pivot_slide: Vec<f64>,
     /// One general joint per moving joint. A value the URDF does not give
     /// (see [`missing_fields`]) is NaN until an override sets it.
     pub joints: Vec<Joint>,
@@ -48,9 +59,21 @@ pub struct UrdfRobot {
 }
 
 /// Reads `path` with `options` and converts it, lengths times `per_metre`
-/// (the scenario's length units per metre).
-pub fn import(path: &Path, options: &LoadOptions, per_metre: f64) -> Result<UrdfRobot, UrdfError> {
-    let chain = capp_urdf::load(path, options)?;
+/// (the scenario's length units per metre); with `slide_pivots`, each
+/// revolute joint's pivot slid along its axis ([`super::pivots`]), else
+/// the URDF's joint origins as they are.
+pub fn import(
+    path: &Path,
+    options: &LoadOptions,
+    per_metre: f64,
+    slide_pivots: bool,
+) -> Result<UrdfRobot, UrdfError> {
+    let read = capp_urdf::load(path, options)?;
+    let pivot_slide = match slide_pivots {
+        true => super::pivots::slides(&read),
+        false => vec![0.0; read.joints.len()],
+    };
+    let chain = super::pivots::slid(&read, &pivot_slide);
     let n = chain.joints.len();
     let mut joints = Vec::with_capacity(n);
     let mut home = Vec::with_capacity(n);
@@ -100,7 +123,7 @@ pub fn import(path: &Path, options: &LoadOptions, per_metre: f64) -> Result<Urdf
             chain
                 .bodies
                 .get(k + 1)
-                .and_then(|body| enclosing_radius(body, &end))
+                .and_then(|body| enclosing_radius(body, &Point3::origin(), &Point3::from(end)))
                 .map(|r| (r * per_metre) as f32)
         })
         .collect();
@@ -111,6 +134,7 @@ pub fn import(path: &Path, options: &LoadOptions, per_metre: f64) -> Result<Urdf
         radii,
         home,
         chain,
+        pivot_slide,
     })
 }
 
@@ -122,27 +146,6 @@ fn placement(iso: &Isometry3<f64>, per_metre: f64) -> Placement {
         rotation: [0, 1, 2].map(|i| [0, 1, 2].map(|k| r[(i, k)] as f32)),
         translation: [t.x as f32, t.y as f32, t.z as f32],
     }
-}
-
-/// The smallest radius of a capsule around the segment from the body's
-/// origin to `end` that holds every capsule of `body` (metres); `None` if
-/// the body has no collision geometry. The distance to a segment is convex,
-/// so a capsule's farthest point from the chord is at one of its ends.
-pub fn enclosing_radius(body: &Body, end: &Vector3<f64>) -> Option<f64> {
-    let chord = capp_urdf::Capsule {
-        a: Point3::origin(),
-        b: Point3::from(*end),
-        radius: 0.0,
-    };
-    body.capsules
-        .iter()
-        .map(|c| {
-            chord
-                .segment_distance(&c.a)
-                .max(chord.segment_distance(&c.b))
-                + c.radius
-        })
-        .reduce(f64::max)
 }
 
 /// What a URDF joint still lacks after the overrides: `"min"`, `"max"`,
