@@ -55,11 +55,14 @@ pub fn joint_v<const N: usize>(robot: &Robot<N>, q: &[f32], goal: &[f32]) -> f32
 /// obstacles (eq. 24, the guard from `input`'s gradient and closest pair),
 /// for a step of `input.step.time_step_s`. `walk`: an escape's walk, which
 /// may raise `V` (it is leaving a dead end); otherwise only a constrained
-/// step may. `rate` and `goal` hold `robot.len()` values.
+/// step may. `project`: whether to project (false for a searched path's
+/// edge, checked clear by the search). `rate` and `goal` hold
+/// `robot.len()` values.
 pub fn joint_rate<const N: usize>(
     input: &LawInput<'_, N>,
     goal: &[f32],
     walk: bool,
+    project: bool,
     rate: &mut [f32],
 ) -> Proposal {
     let (robot, q, time_step_s) = (input.robot, input.q, input.step.time_step_s);
@@ -77,7 +80,10 @@ pub fn joint_rate<const N: usize>(
     let gap = time_at_limits(robot, rate);
     let mut constrained = false;
     let approach = dot_slice(guard.gradient, rate);
-    if let Some(allowed) = guard.allowed(approach, gap <= FINAL_APPROACH_STEPS * time_step_s) {
+    let allowed = guard
+        .allowed(approach, gap <= FINAL_APPROACH_STEPS * time_step_s)
+        .filter(|_| project);
+    if let Some(allowed) = allowed {
         let metric = |j: usize| {
             robot
                 .joints()
@@ -115,5 +121,65 @@ pub fn joint_rate<const N: usize>(
         time_step_s,
         may_rise: constrained || walk,
         arrival_s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::LawSettings;
+    use crate::kinematics::{forward_kinematics, Frames};
+    use crate::robot::Joint;
+    use crate::step_size::StepRule;
+    use crate::target::PoseError;
+
+    /// A walk's step toward a configuration is projected when it runs
+    /// toward a close obstacle (the gradient `mu` against it, the
+    /// clearance inside the engaged band); a searched path's step to the
+    /// same configuration is not: it is the straight segment at the rate
+    /// limits, whatever `mu` says.
+    #[test]
+    fn a_walk_is_projected_and_a_searched_path_is_not() {
+        let joints = [Joint::revolute(0.0, 1.0, 0.0, -3.0, 3.0, 1.0); 3];
+        let robot = Robot::<3>::new(&joints).unwrap();
+        let q = [0.1f32, 0.2, 0.3];
+        let goal = [0.6f32, -0.3, 0.5];
+        let mut frames = Frames::<3>::default();
+        forward_kinematics(&robot, &q, &mut frames);
+        // The gradient rises along the way to the goal: the motion approaches.
+        let mu = [1.0f32, -1.0, 0.5];
+        let law = LawSettings::default();
+        let error = PoseError::default();
+        let input = LawInput {
+            robot: &robot,
+            frames: &frames,
+            q: &q,
+            error: &error,
+            mu: &mu,
+            clearance: Some(0.2),
+            law: &law,
+            engage_clearance: 1.0,
+            step: StepRule {
+                time_step_s: 0.05,
+                fine_radius: 0.0,
+                fine_step_fraction: 1.0,
+            },
+            error_step: 0.0,
+        };
+        let (mut walk, mut path) = ([0.0f32; 3], [0.0f32; 3]);
+        let walked = joint_rate(&input, &goal, true, true, &mut walk);
+        let followed = joint_rate(&input, &goal, true, false, &mut path);
+        assert!(walked.constrained && !followed.constrained);
+        assert!(dot_slice(&mu, &walk) < dot_slice(&mu, &path));
+        // The path's rate is the straight segment with its most loaded
+        // joints (0.5 rad each) at their limit (1 rad/s).
+        let straight: [f32; 3] = core::array::from_fn(|j| (goal[j] - q[j]) / 0.5);
+        for j in 0..3 {
+            assert!(
+                (path[j] - straight[j]).abs() < 1e-6,
+                "{path:?} vs {straight:?}"
+            );
+        }
+        assert!(followed.may_rise);
     }
 }

@@ -22,9 +22,17 @@ pub enum DriveGoal<'a> {
     /// ([`crate::control::joint_space`]); `V` may not rise unless the
     /// projection constrained the step.
     Joints(&'a [f32]),
-    /// Straight in joint space along an escape's walk, its path or its
-    /// return ([`crate::escape`]): `V` may rise (it is leaving a dead end).
+    /// Straight in joint space along an escape's walk or its return
+    /// ([`crate::escape`]): `V` may rise (it is leaving a dead end).
     Walk(&'a [f32]),
+    /// Straight in joint space to the next node of a path the escape's
+    /// search found ([`crate::escape::search`]): as [`DriveGoal::Walk`],
+    /// but not projected against the obstacles' gradient. The search
+    /// checked the edge clear; the projection would remove the part of it
+    /// that runs toward a close obstacle or link, which stalls the walk
+    /// where the path passes near one. Conservative advancement and the
+    /// step's checks still bound every step.
+    Path(&'a [f32]),
 }
 
 /// The buffers of both law families, side by side. One enum holding either
@@ -62,8 +70,9 @@ pub fn propose<const N: usize>(
     rate: &mut [f32],
 ) -> Proposal {
     match goal {
-        DriveGoal::Joints(goal) => joint_rate(input, goal, false, rate),
-        DriveGoal::Walk(goal) => joint_rate(input, goal, true, rate),
+        DriveGoal::Joints(goal) => joint_rate(input, goal, false, true, rate),
+        DriveGoal::Walk(goal) => joint_rate(input, goal, true, true, rate),
+        DriveGoal::Path(goal) => joint_rate(input, goal, true, false, rate),
         DriveGoal::Pose => match input.law.kind {
             LawKind::Gradient | LawKind::Paper => {
                 first_order_rate(input, &mut ws.first_order, rate)

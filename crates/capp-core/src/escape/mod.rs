@@ -368,6 +368,9 @@ impl<const N: usize> Escape<N> {
             return (Target::pose(point, None), DriveGoal::Pose);
         }
         let goal = match (self.goal(), target.joints) {
+            (Some(goal), _) if matches!(self.state, EscapeState::Following { .. }) => {
+                DriveGoal::Path(&goal[..n])
+            }
             (Some(goal), _) => DriveGoal::Walk(&goal[..n]),
             (None, Some(k)) => scenario
                 .joint_goal(k)
@@ -785,6 +788,25 @@ mod tests {
         let frames = evaluated(&sc, &goal).frames;
         assert_eq!(escape.after_step(&sc, &goal, &frames), Leg::Over);
         assert_eq!(escape.state(), EscapeState::Descending { attempts: 1 });
+    }
+
+    /// A path the search found is driven to node by node as
+    /// [`DriveGoal::Path`] (not projected: the search checked its edges),
+    /// where a walk is [`DriveGoal::Walk`].
+    #[test]
+    fn a_found_path_is_driven_as_a_path_not_as_a_walk() {
+        let sc = scenario(EscapeSettings::default());
+        let mut escape = Escape::<N>::new(1, &Q);
+        assert!(stall(&mut escape, &sc, &Q, None));
+        assert!(escape.is_searching());
+        escape.follow();
+        assert!(matches!(
+            escape.state(),
+            EscapeState::Following { attempt: 1, .. }
+        ));
+        let goal = *escape.goal().unwrap();
+        let (_, drive) = escape.drive_goal(&sc, &sc.targets()[0]);
+        assert_eq!(drive, DriveGoal::Path(&goal[..]));
     }
 
     #[test]

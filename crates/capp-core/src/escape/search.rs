@@ -20,7 +20,9 @@
 //!    configurations otherwise, from the nearest node in seconds at the rate
 //!    limits; edges at most [`EDGE_STEPS`] time steps at the rate limits,
 //!    checked at [`EDGE_CHECKS`] configurations along them (clear, and above
-//!    the contact floor or no closer than where they come from). At most
+//!    the contact floor or no closer than where they come from); an edge
+//!    blocked part of the way is kept as far as it was checked clear
+//!    (RRT's extend), and a greedy connection stops there. At most
 //!    [`EXTENSIONS`] extensions and [`TREE_NODES`] nodes; the search ends at
 //!    the first node within one edge of the goal configuration.
 //! 4. **Shortcut**: the path is shortened greedily, as sampling planners
@@ -40,9 +42,9 @@ use crate::control::{time_at_limits, LawInput, LawKind};
 use crate::escape::rng::Rng;
 use crate::escape::tree::{Tree, TREE_NODES};
 use crate::evaluation::Evaluation;
-use crate::math::all_finite;
+use crate::math::{all_finite, max, min};
 use crate::projection::CONTACT_FLOOR;
-use crate::robot::Robot;
+use crate::robot::{JointKind, Robot};
 use crate::scenario::Scenario;
 use crate::step_size::{advancement, StepRule};
 use crate::target::Target;
@@ -58,6 +60,9 @@ pub const GOAL_NEAR: f32 = 10.0;
 pub const TRUNK_STEPS: u16 = 16;
 /// Extensions of the tree per search.
 pub const EXTENSIONS: u16 = 2 * TREE_NODES as u16;
+/// How far beyond the span between the dead end and the goal configuration
+/// a revolute joint's random samples reach, radians.
+pub const SAMPLE_TURN: f32 = core::f32::consts::PI;
 /// Share of the extensions that reach for the goal configuration.
 pub const GOAL_BIAS: f32 = 0.3;
 /// Longest edge, in planner time steps at the rate limits.
@@ -191,8 +196,16 @@ impl<const N: usize> Search<N> {
     fn found(&mut self, end: usize) {
         self.path_len = self.tree.path(end, &mut self.path) as u8;
         self.stage = Stage::Shortcut;
-        self.from = 0;
-        self.out = 1;
+        // The trunk's nodes on the path (node k at position k, up to its
+        // last node) are kept as they are: each is a step the planner
+        // would take off the surface, where a straight shortcut from the
+        // dead end may graze it.
+        let trunk = (1..=self.base as usize)
+            .take_while(|&k| self.path.get(k).is_some_and(|&p| p as usize == k))
+            .count()
+            .min((self.path_len as usize).saturating_sub(1));
+        self.from = trunk as u8;
+        self.out = trunk as u8 + 1;
         self.to = self.path_len.saturating_sub(1);
         self.check = 1;
     }
@@ -270,6 +283,30 @@ fn draw_configuration<const N: usize>(rng: &mut Rng, robot: &Robot<N>, q: &mut [
     for (j, joint) in robot.joints().iter().enumerate().take(robot.len().min(N)) {
         let u = 0.5 * (rng.uniform() + 1.0);
         q[j] = joint.min + u * (joint.max - joint.min);
+    }
+}
+
+/// `q` drawn uniformly within the joint limits and, for a revolute joint,
+/// within [`SAMPLE_TURN`] radians beyond the span between `a` and `b` (the
+/// dead end and the goal configuration): a joint of a wide range (the UR5's
+/// +-2 pi) is not explored a turn away from both ends.
+fn draw_between<const N: usize>(
+    rng: &mut Rng,
+    robot: &Robot<N>,
+    a: &[f32; N],
+    b: &[f32; N],
+    q: &mut [f32; N],
+) {
+    for (j, joint) in robot.joints().iter().enumerate().take(robot.len().min(N)) {
+        let (lo, hi) = match joint.kind {
+            JointKind::Revolute => (
+                max(joint.min, min(a[j], b[j]) - SAMPLE_TURN),
+                min(joint.max, max(a[j], b[j]) + SAMPLE_TURN),
+            ),
+            JointKind::Prismatic => (joint.min, joint.max),
+        };
+        let u = 0.5 * (rng.uniform() + 1.0);
+        q[j] = lo + u * (hi - lo);
     }
 }
 
@@ -393,7 +430,8 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
                 *im.s.q = goal;
                 search.connecting = Some(0);
             } else {
-                draw_configuration(rng, robot, im.s.q);
+                let root = *search.tree.node(0);
+                draw_between(rng, robot, &root, &goal, im.s.q);
             }
             search.tree.nearest(robot, &im.s.q[..n])
         }
@@ -413,26 +451,41 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
     *spent += 1;
     let mut c_from = im.s.next.closest();
     let mut clear = all_finite(&im.s.rate[..n]);
+    // The last configuration checked clear along the edge, and its `V`.
+    let mut last_clear = 0usize;
+    let mut last_v = 0.0f32;
+    let along = |k: usize| edge_s * k as f32 / EDGE_CHECKS as f32;
     for k in 1..=EDGE_CHECKS {
         if !clear {
             break;
         }
-        let along = edge_s * k as f32 / EDGE_CHECKS as f32;
+        let along = along(k);
         for (j, joint) in robot.joints().iter().enumerate().take(n) {
             im.s.q[j] = joint.clamp(qa[j] + along * im.s.rate[j]);
         }
         *spent += 1;
         clear = im.accept(c_from);
         c_from = im.s.next.closest();
+        if clear {
+            (last_clear, last_v) = (k, im.s.next.error.v);
+        }
     }
     if !clear {
+        // RRT's extend: the edge as far as it was checked clear, if any
+        // of it was; a greedy connection stops there.
         search.connecting = None;
-        return Slice::Working;
+        if last_clear == 0 {
+            return Slice::Working;
+        }
+        let along = along(last_clear);
+        for (j, joint) in robot.joints().iter().enumerate().take(n) {
+            im.s.q[j] = joint.clamp(qa[j] + along * im.s.rate[j]);
+        }
     }
-    let Some(i) = search.tree.push(&im.s.q[..n], a, im.s.next.error.v) else {
+    let Some(i) = search.tree.push(&im.s.q[..n], a, last_v) else {
         return Slice::Failed;
     };
-    if search.connecting.is_some() {
+    if clear && search.connecting.is_some() {
         search.connecting = Some(i as u8);
     }
     if gap(robot, &im.s.q[..n], &goal[..n]) <= edge_s {
@@ -586,6 +639,100 @@ impl<const N: usize, const M: usize, const W: usize> Imagination<'_, '_, N, M, W
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::control::law::LawWorkspace;
+    use crate::mission::{Settings, Waypoint};
+    use crate::obstacle::SuperEllipsoid;
+    use crate::robot::Joint;
+
+    /// Random samples stay within the joint limits and, for a revolute
+    /// joint, within `SAMPLE_TURN` beyond the span of the two ends; a
+    /// prismatic joint's fill its range. Both bounds are approached.
+    #[test]
+    fn samples_stay_within_a_turn_of_the_dead_end_and_the_goal() {
+        let wide = Joint::revolute(0.0, 1.0, 0.0, -6.2, 6.2, 1.0);
+        let narrow = Joint::revolute(0.0, 1.0, 0.0, -1.0, 1.0, 1.0);
+        let slide = Joint::prismatic(0.0, 0.0, 0.0, 0.5, 2.0, 1.0);
+        let robot = Robot::<3>::new(&[wide, narrow, slide]).unwrap();
+        let (a, b) = ([0.5f32, -0.2, 0.7], [1.5f32, 0.3, 0.9]);
+        let mut rng = Rng::seeded(7, &[]);
+        let mut q = [0.0f32; 3];
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for _ in 0..4000 {
+            draw_between(&mut rng, &robot, &a, &b, &mut q);
+            for j in 0..3 {
+                lo[j] = lo[j].min(q[j]);
+                hi[j] = hi[j].max(q[j]);
+            }
+        }
+        let expect = [
+            (0.5 - SAMPLE_TURN, 1.5 + SAMPLE_TURN),
+            (-1.0, 1.0),
+            (0.5, 2.0),
+        ];
+        for j in 0..3 {
+            let (l, h) = expect[j];
+            assert!(
+                lo[j] >= l && hi[j] <= h,
+                "joint {j}: [{}, {}]",
+                lo[j],
+                hi[j]
+            );
+            assert!(lo[j] < l + 0.01 * (h - l) && hi[j] > h - 0.01 * (h - l));
+        }
+    }
+
+    /// An edge toward the goal blocked partway by an obstacle is kept as
+    /// far as it was checked clear (RRT's extend): the tree grows by one
+    /// node, partway along the edge, clear, and the greedy connection stops.
+    #[test]
+    fn a_blocked_edge_is_kept_as_far_as_it_is_clear() {
+        const N: usize = 2;
+        // A planar 2-link arm (links of 1); a ball the elbow meets when
+        // joint 1 turns from 0 toward 1.2 rad.
+        let joint = Joint::revolute(0.0, 1.0, 0.0, -3.0, 3.0, 1.0);
+        let robot = Robot::<N>::new(&[joint; N]).unwrap();
+        let settings = Settings::for_robot(&robot);
+        let mission = crate::Mission::new(&[Waypoint::at([0.0, 2.0, 0.0])], settings).unwrap();
+        let ball = SuperEllipsoid::aligned([0.82, 0.57, 0.0], [0.1; 3], 2.0);
+        let sc = Scenario::<N, 1, 1>::new(robot, &[ball], &mission).unwrap();
+        let target = sc.targets()[0];
+        let mut search = Search::<N>::default();
+        search.begin(&[0.0, 0.0], 1.0);
+        search.goal = [1.2, 0.0];
+        search.stage = Stage::Grow;
+        search.connecting = Some(0);
+        let (mut next, mut q, mut rate) = (Evaluation::new(), [0.0f32; N], [0.0f32; N]);
+        let mut law = LawWorkspace::default();
+        let mut s = Scratch {
+            next: &mut next,
+            q: &mut q,
+            rate: &mut rate,
+            law: &mut law,
+        };
+        let im = &mut Imagination {
+            scenario: &sc,
+            target: &target,
+            s: &mut s,
+        };
+        let mut rng = Rng::seeded(1, &[]);
+        let mut spent = 0;
+        assert_eq!(
+            grow_unit(&mut search, &mut rng, im, &mut spent),
+            Slice::Working
+        );
+        assert_eq!(search.tree.len(), 2, "one node added");
+        let node = *search.tree.node(1);
+        // Partway: joint 1 moved toward the goal but not all the way to
+        // the edge's end (0.5 s at 1 rad/s), joint 2 still.
+        assert!(node[0] > 0.0 && node[0] < 0.5, "{node:?}");
+        assert_eq!(node[1], 0.0);
+        im.evaluate(&node);
+        assert!(im.s.next.clear(), "the kept node is clear");
+        assert_eq!(search.connecting, None);
+        // The whole edge was not clear: its end is in the ball.
+        im.evaluate(&[0.5, 0.0]);
+        assert!(!im.s.next.clear());
+    }
 
     #[test]
     fn a_found_path_starts_at_the_dead_end_and_clears_in_place() {
