@@ -119,6 +119,14 @@ fn urdf_scenarios_plan_to_their_targets_and_the_checker_accepts() {
     }
 }
 
+/// `panda_table.toml` with its URDF path made absolute, to be written
+/// into a scratch directory.
+fn panda_table_anywhere() -> String {
+    std::fs::read_to_string(scenario("panda_table.toml"))
+        .unwrap()
+        .replace("../../robots", &repo().join("robots").display().to_string())
+}
+
 /// `slide_pivots = false` keeps the URDF's joint origins (the pivots are
 /// Pinocchio's); by default the Panda's column between joints 1 and 2, a
 /// chord of no length at the URDF's origins, gets a chord through it and a
@@ -127,9 +135,7 @@ fn urdf_scenarios_plan_to_their_targets_and_the_checker_accepts() {
 #[test]
 fn pivots_slide_along_their_axes_unless_told_not_to() {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(scenario("panda_table.toml"))
-        .unwrap()
-        .replace("../../robots", &repo().join("robots").display().to_string());
+    let text = panda_table_anywhere();
     let kept = text.replace(
         "tip_link = \"panda_link8\"",
         "tip_link = \"panda_link8\"\nslide_pivots = false",
@@ -184,9 +190,7 @@ fn pivots_slide_along_their_axes_unless_told_not_to() {
 #[test]
 fn overrides_by_name_and_missing_velocity_limits() {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(scenario("panda_table.toml"))
-        .unwrap()
-        .replace("../../robots", &repo().join("robots").display().to_string());
+    let text = panda_table_anywhere();
     let path = dir.path().join("p.toml");
     std::fs::write(&path, &text).unwrap();
     let problem = Problem::load(&path).unwrap();

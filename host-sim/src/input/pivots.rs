@@ -60,8 +60,9 @@ pub fn enclosing_radius(body: &Body, p: &Point3<f64>, e: &Point3<f64>) -> Option
 }
 
 /// Link `k`'s chord in its body's URDF frame (joint `k`'s), for slides
-/// `lambda`: from joint `k`'s slid pivot to joint `k + 1`'s, or to the tip.
-fn chord(chain: &Chain, lambda: &[f64], k: usize) -> (Point3<f64>, Point3<f64>) {
+/// `lambda` (none given: 0): from joint `k`'s slid pivot to joint
+/// `k + 1`'s, or to the tip.
+pub fn chord(chain: &Chain, lambda: &[f64], k: usize) -> (Point3<f64>, Point3<f64>) {
     let slide = |j: usize| lambda.get(j).copied().unwrap_or(0.0);
     let axis = |j: usize| chain.joints[j].axis.into_inner();
     let p = Point3::from(axis(k) * slide(k));
@@ -131,9 +132,8 @@ pub fn slides(chain: &Chain) -> Vec<f64> {
             for _ in 0..2 {
                 for i in 0..=2 * GRID {
                     let candidate = centre + (i as f64 - GRID as f64) * step;
-                    let mut trial = lambda.clone();
-                    trial[k] = candidate;
-                    let v = around(&trial, k);
+                    lambda[k] = candidate;
+                    let v = around(&lambda, k);
                     // Strictly smaller only: no slide where nothing is gained.
                     if v < best_volume * (1.0 - 1e-9) {
                         best = candidate;

@@ -29,7 +29,7 @@ use super::pivots::enclosing_radius;
 use capp_core::robot::{JointOrigin, Placement};
 use capp_core::{Joint, JointKind};
 use capp_urdf::{Chain, LoadOptions, UrdfError};
-use nalgebra::{Isometry3, Point3};
+use nalgebra::Isometry3;
 
 /// A continuous joint's range each way from zero, radians: one turn.
 pub const CONTINUOUS_RANGE_RAD: f64 = 2.0 * std::f64::consts::PI;
@@ -112,18 +112,14 @@ pub fn import(
             (0.5 * (min + max)) as f32
         });
     }
-    // Link k's chord, in joint k's frame: from its origin to the next
-    // joint's (or to the tool's).
+    // Link k's chord, in joint k's (slid) frame.
     let radii = (0..n)
         .map(|k| {
-            let end = match chain.joints.get(k + 1) {
-                Some(next) => next.origin.translation.vector,
-                None => chain.tool.translation.vector,
-            };
+            let (pivot, end) = super::pivots::chord(&chain, &[], k);
             chain
                 .bodies
                 .get(k + 1)
-                .and_then(|body| enclosing_radius(body, &Point3::origin(), &Point3::from(end)))
+                .and_then(|body| enclosing_radius(body, &pivot, &end))
                 .map(|r| (r * per_metre) as f32)
         })
         .collect();

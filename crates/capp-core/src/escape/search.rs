@@ -281,9 +281,14 @@ pub fn slice<const N: usize, const M: usize, const W: usize>(
 /// `q` drawn uniformly within the joint limits.
 fn draw_configuration<const N: usize>(rng: &mut Rng, robot: &Robot<N>, q: &mut [f32; N]) {
     for (j, joint) in robot.joints().iter().enumerate().take(robot.len().min(N)) {
-        let u = 0.5 * (rng.uniform() + 1.0);
-        q[j] = joint.min + u * (joint.max - joint.min);
+        q[j] = draw(rng, joint.min, joint.max);
     }
+}
+
+/// A value drawn uniformly in `[lo, hi]`.
+fn draw(rng: &mut Rng, lo: f32, hi: f32) -> f32 {
+    let u = 0.5 * (rng.uniform() + 1.0);
+    lo + u * (hi - lo)
 }
 
 /// `q` drawn uniformly within the joint limits and, for a revolute joint,
@@ -298,15 +303,28 @@ fn draw_between<const N: usize>(
     q: &mut [f32; N],
 ) {
     for (j, joint) in robot.joints().iter().enumerate().take(robot.len().min(N)) {
-        let (lo, hi) = match joint.kind {
-            JointKind::Revolute => (
+        q[j] = match joint.kind {
+            JointKind::Revolute => draw(
+                rng,
                 max(joint.min, min(a[j], b[j]) - SAMPLE_TURN),
                 min(joint.max, max(a[j], b[j]) + SAMPLE_TURN),
             ),
-            JointKind::Prismatic => (joint.min, joint.max),
+            JointKind::Prismatic => draw(rng, joint.min, joint.max),
         };
-        let u = 0.5 * (rng.uniform() + 1.0);
-        q[j] = lo + u * (hi - lo);
+    }
+}
+
+/// The configuration `along` seconds (at `rate`) from `qa`, within the
+/// joint limits, into `q`.
+fn along_edge<const N: usize>(
+    robot: &Robot<N>,
+    qa: &[f32; N],
+    rate: &[f32; N],
+    along: f32,
+    q: &mut [f32; N],
+) {
+    for (j, joint) in robot.joints().iter().enumerate().take(robot.len().min(N)) {
+        q[j] = joint.clamp(qa[j] + along * rate[j]);
     }
 }
 
@@ -430,8 +448,7 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
                 *im.s.q = goal;
                 search.connecting = Some(0);
             } else {
-                let root = *search.tree.node(0);
-                draw_between(rng, robot, &root, &goal, im.s.q);
+                draw_between(rng, robot, search.tree.node(0), &goal, im.s.q);
             }
             search.tree.nearest(robot, &im.s.q[..n])
         }
@@ -459,10 +476,7 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
         if !clear {
             break;
         }
-        let along = along(k);
-        for (j, joint) in robot.joints().iter().enumerate().take(n) {
-            im.s.q[j] = joint.clamp(qa[j] + along * im.s.rate[j]);
-        }
+        along_edge(robot, &qa, im.s.rate, along(k), im.s.q);
         *spent += 1;
         clear = im.accept(c_from);
         c_from = im.s.next.closest();
@@ -477,10 +491,7 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
         if last_clear == 0 {
             return Slice::Working;
         }
-        let along = along(last_clear);
-        for (j, joint) in robot.joints().iter().enumerate().take(n) {
-            im.s.q[j] = joint.clamp(qa[j] + along * im.s.rate[j]);
-        }
+        along_edge(robot, &qa, im.s.rate, along(last_clear), im.s.q);
     }
     let Some(i) = search.tree.push(&im.s.q[..n], a, last_v) else {
         return Slice::Failed;
