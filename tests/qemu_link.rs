@@ -45,7 +45,8 @@ fn host_plan(
 ) -> (Vec<(u32, Vec<f32>)>, Outcome) {
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(waypoints, settings).unwrap();
-    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut decimator = Decimator::new(SetpointFilter::Every(every));
     let mut out = Vec::new();

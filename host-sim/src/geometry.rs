@@ -390,26 +390,116 @@ pub fn segment_distance(p0: V3, p1: V3, q0: V3, q1: V3) -> SegmentDistance {
 /// An obstacle in `f64`, ready to evaluate.
 struct Shape {
     centre: [f64; 3],
-    axes: [f64; 3],
-    exponents: [f64; 3],
     r: [[f64; 3]; 3],
+    form: Form,
+}
+
+/// What an obstacle is in its own frame, `f64`.
+enum Form {
+    /// Eq. 25: semi-axes and exponents.
+    SuperEllipsoid { axes: [f64; 3], exponents: [f64; 3] },
+    /// A primitive by its closest point ([`closest_point`]) and inradius.
+    Primitive {
+        shape: capp_core::Shape,
+        inradius: f64,
+    },
 }
 
 impl Shape {
-    /// `C(p) - 1` of the obstacle inflated by `margin` (eq. 25).
+    fn new(o: &capp_core::Solid) -> Shape {
+        use capp_core::Shape as S;
+        let form = match o.shape {
+            S::SuperEllipsoid {
+                semi_axes,
+                exponents,
+            } => Form::SuperEllipsoid {
+                axes: semi_axes.map(f64::from),
+                exponents: exponents.map(f64::from),
+            },
+            shape => Form::Primitive {
+                shape,
+                inradius: match shape {
+                    S::Sphere { radius } | S::Capsule { radius, .. } => radius as f64,
+                    S::Cuboid { half_extents: h } => {
+                        h.iter().fold(f64::INFINITY, |m, &x| m.min(x as f64))
+                    }
+                    S::Cylinder { radius, length } => (radius as f64).min(0.5 * length as f64),
+                    S::SuperEllipsoid { .. } => 0.0,
+                },
+            },
+        };
+        Shape {
+            centre: o.centre.map(f64::from),
+            r: rotation(o.euler_123.map(f64::from)),
+            form,
+        }
+    }
+
+    /// `C(p) - 1` of the obstacle inflated by `margin`: eq. 25 for a
+    /// super-ellipsoid; for a primitive the same rebuilt on its signed
+    /// distance `d`, `((d + rho) / (margin + rho))^2 - 1` (`rho` its
+    /// inradius), negative exactly when `d < margin`.
     fn clearance(&self, p: [f64; 3], margin: f64) -> f64 {
         let d = [
             p[0] - self.centre[0],
             p[1] - self.centre[1],
             p[2] - self.centre[2],
         ];
-        let mut c = 0.0;
-        for i in 0..3 {
-            // x_i = (R^T d)_i = column i of R dotted with d.
-            let x = self.r[0][i] * d[0] + self.r[1][i] * d[1] + self.r[2][i] * d[2];
-            c += power(x.abs() / (self.axes[i] + margin), self.exponents[i]);
+        // x_i = (R^T d)_i = column i of R dotted with d.
+        let x: [f64; 3] = std::array::from_fn(|i| {
+            self.r[0][i] * d[0] + self.r[1][i] * d[1] + self.r[2][i] * d[2]
+        });
+        match &self.form {
+            Form::SuperEllipsoid { axes, exponents } => {
+                let mut c = 0.0;
+                for i in 0..3 {
+                    c += power(x[i].abs() / (axes[i] + margin), exponents[i]);
+                }
+                c - 1.0
+            }
+            Form::Primitive { shape, inradius } => {
+                let u = (signed_distance(shape, x) + inradius) / (margin + inradius);
+                u * u - 1.0
+            }
         }
-        c - 1.0
+    }
+}
+
+/// The signed distance from the local point `x` to a primitive's surface
+/// (negative inside): outside, the distance to its closest point; inside,
+/// minus the distance to the nearest face.
+pub fn signed_distance(shape: &capp_core::Shape, x: [f64; 3]) -> f64 {
+    use capp_core::Shape as S;
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    match *shape {
+        S::Sphere { radius } => norm(x) - radius as f64,
+        S::Capsule { radius, length } => {
+            let l = 0.5 * length as f64;
+            norm([x[0], x[1], x[2] - x[2].clamp(-l, l)]) - radius as f64
+        }
+        S::Cuboid { half_extents } => {
+            let h = half_extents.map(f64::from);
+            let closest: [f64; 3] = std::array::from_fn(|i| x[i].clamp(-h[i], h[i]));
+            let outside = norm(std::array::from_fn(|i| x[i] - closest[i]));
+            if outside > 0.0 {
+                outside
+            } else {
+                (0..3)
+                    .map(|i| x[i].abs() - h[i])
+                    .fold(f64::NEG_INFINITY, f64::max)
+            }
+        }
+        S::Cylinder { radius, length } => {
+            let (r, l) = (radius as f64, 0.5 * length as f64);
+            let rho = x[0].hypot(x[1]);
+            let (radial, axial) = (rho - r, x[2].abs() - l);
+            if radial > 0.0 || axial > 0.0 {
+                radial.max(0.0).hypot(axial.max(0.0))
+            } else {
+                radial.max(axial)
+            }
+        }
+        S::SuperEllipsoid { .. } => f64::NAN,
     }
 }
 
@@ -534,16 +624,7 @@ impl Geometry {
         Geometry {
             joints: problem.joints.clone(),
             tool: problem.tool,
-            shapes: problem
-                .obstacles
-                .iter()
-                .map(|o| Shape {
-                    centre: o.centre.map(f64::from),
-                    axes: o.semi_axes.map(f64::from),
-                    exponents: o.exponents.map(f64::from),
-                    r: rotation(o.euler_123.map(f64::from)),
-                })
-                .collect(),
+            shapes: problem.obstacles.iter().map(Shape::new).collect(),
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
             links: Links::new(problem),

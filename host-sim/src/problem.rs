@@ -18,7 +18,7 @@ use capp_core::robot::{Placement, RobotError};
 use capp_core::self_collision::pairs::{PairTable, SAMPLES};
 use capp_core::{
     Joint, Mission, MissionError, Planner, Robot, Scenario, ScenarioError, SetpointFilter,
-    Settings, StartError, SuperEllipsoid, Waypoint,
+    Settings, Solid, StartError, Waypoint,
 };
 
 /// Joint capacity of the simulator.
@@ -229,7 +229,7 @@ pub struct Problem {
     /// Joint names (for messages and plots).
     pub joint_names: Vec<String>,
     /// The obstacles.
-    pub obstacles: Vec<SuperEllipsoid>,
+    pub obstacles: Vec<Solid>,
     /// Obstacle names.
     pub obstacle_names: Vec<String>,
     /// Waypoints; the last is the target.
@@ -585,7 +585,8 @@ fn obstacle_error_index(e: &capp_core::ObstacleError) -> Option<usize> {
         E::NotFinite { obstacle, .. }
         | E::SemiAxisOutOfRange { obstacle }
         | E::CentreOutOfRange { obstacle }
-        | E::ExponentOutOfRange { obstacle } => Some(obstacle as usize),
+        | E::ExponentOutOfRange { obstacle }
+        | E::SizeOutOfRange { obstacle } => Some(obstacle as usize),
         E::TooMany { .. } => None,
     }
 }

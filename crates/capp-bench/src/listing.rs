@@ -21,7 +21,7 @@
 //! clamping into the joint limits.
 
 use capp_core::math::Vec3;
-use capp_core::obstacle::Obstacle;
+use capp_core::obstacle::{Obstacle, PointKind};
 use capp_core::{JointKind, Scenario};
 
 /// Joint perturbation of the central differences (the listing's 0.005 rad or in).
@@ -80,9 +80,14 @@ fn translation(t: &Mat4) -> Vec3 {
     Vec3::new(t[0][3], t[1][3], t[2][3])
 }
 
-/// `C - 1` of eq. 25 with `powf`, inflated by `margin`, over every axis.
-fn cost(obstacle: &Obstacle, p: &Vec3, margin: f32) -> f32 {
-    let s = obstacle.source();
+/// `C - 1` of eq. 25 with `powf`, inflated by the margin of `kind`, over
+/// every axis. The listing knows only super-ellipsoids: another shape is
+/// measured as the core measures it.
+fn cost(obstacle: &Obstacle, p: &Vec3, kind: PointKind, margins: [f32; 2]) -> f32 {
+    let Some(s) = obstacle.source().super_ellipsoid() else {
+        return obstacle.clearance_uncut(p, kind);
+    };
+    let margin = margins[kind as usize];
     let x = obstacle.rotation().transpose() * (p - obstacle.centre());
     let mut c = -1.0;
     for axis in 0..3 {
@@ -117,8 +122,8 @@ pub fn evaluate<const N: usize, const M: usize, const W: usize>(
         let origin = translation(&t);
         let middle = (origin + previous) * 0.5;
         for obstacle in obstacles {
-            potential += 1.0 / cost(obstacle, &origin, avoidance.joint_margin);
-            potential += 1.0 / cost(obstacle, &middle, avoidance.link_margin);
+            potential += 1.0 / cost(obstacle, &origin, PointKind::Joint, avoidance.margins());
+            potential += 1.0 / cost(obstacle, &middle, PointKind::Link, avoidance.margins());
         }
         previous = origin;
     }

@@ -4,7 +4,7 @@
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{is_rotation, vec3, Mat3};
 use crate::mission::{JointGoalProblem, Mission, MissionError, Settings, Waypoint};
-use crate::obstacle::{Obstacle, ObstacleError, SuperEllipsoid, MAX_EXTENT};
+use crate::obstacle::{Obstacle, ObstacleError, Solid, MAX_EXTENT};
 use crate::robot::{Joint, Placement, Robot, RobotError};
 use crate::self_collision::{CapsuleError, LinkCapsules};
 use crate::target::Target;
@@ -104,9 +104,11 @@ pub struct Scenario<const N: usize, const M: usize, const W: usize> {
 
 impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// Validates the obstacles and the mission against the robot.
-    pub fn new(
+    /// Obstacles are [`Solid`]s, or anything that becomes one (a
+    /// [`crate::SuperEllipsoid`]).
+    pub fn new<S: Into<Solid> + Copy>(
         robot: Robot<N>,
-        obstacles: &[SuperEllipsoid],
+        obstacles: &[S],
         mission: &Mission<W>,
     ) -> Result<Self, ScenarioError> {
         let mut scenario = Self::empty();
@@ -134,10 +136,10 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// same checks in the same order and the same scenario, without a
     /// scenario-sized value on the stack (17 KiB for PIPS with room for 64
     /// obstacles). On error `self` is left empty (as [`Scenario::empty`]).
-    pub fn init(
+    pub fn init<S: Into<Solid> + Copy>(
         &mut self,
         joints: &[Joint],
-        obstacles: &[SuperEllipsoid],
+        obstacles: &[S],
         waypoints: &[Waypoint],
         settings: Settings,
     ) -> Result<(), ScenarioError> {
@@ -146,11 +148,11 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
 
     /// [`Scenario::init`] with a tool: the robot is
     /// [`Robot::new_with_tool`]'s (`tool` the identity gives `init`'s).
-    pub fn init_with_tool(
+    pub fn init_with_tool<S: Into<Solid> + Copy>(
         &mut self,
         joints: &[Joint],
         tool: &Placement,
-        obstacles: &[SuperEllipsoid],
+        obstacles: &[S],
         waypoints: &[Waypoint],
         settings: Settings,
     ) -> Result<(), ScenarioError> {
@@ -175,14 +177,14 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// Makes this scenario [`Scenario::empty`], in place.
     pub fn clear(&mut self) {
         self.robot.clear();
-        let _ = self.fill(&[], &[], Settings::default());
+        let _ = self.fill::<Solid>(&[], &[], Settings::default());
     }
 
     /// Rebuilds every field but the robot (validated by `Robot::new` /
     /// `Robot::init`), in place; shared by `new` and `init`.
-    fn fill(
+    fn fill<S: Into<Solid> + Copy>(
         &mut self,
-        obstacles: &[SuperEllipsoid],
+        obstacles: &[S],
         waypoints: &[Waypoint],
         settings: Settings,
     ) -> Result<(), ScenarioError> {

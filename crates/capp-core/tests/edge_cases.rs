@@ -287,7 +287,11 @@ fn metres_and_inches_give_the_same_outcome() {
     let robot = bad.robot().clone();
     let mut s = *bad.settings();
     s.avoidance = AvoidanceSettings::default();
-    let obstacles: Vec<SuperEllipsoid> = bad.obstacles().iter().map(|o| *o.source()).collect();
+    let obstacles: Vec<SuperEllipsoid> = bad
+        .obstacles()
+        .iter()
+        .map(|o| o.source().super_ellipsoid().expect("a super-ellipsoid"))
+        .collect();
     bad = Sc::new(
         robot,
         &obstacles,

@@ -170,7 +170,7 @@ fn in_place_refuses_what_new_refuses_and_leaves_an_empty_value() {
     let inside = sc.unwrap();
     let clear = Sc::new(
         Robot::new(&joints).unwrap(),
-        &[],
+        &[] as &[capp_core::Solid],
         &Mission::new(&ok, Settings::default()).unwrap(),
     )
     .unwrap();

@@ -382,7 +382,7 @@ fn bad_inputs_are_errors_not_panics() {
     // Waypoints: NaN position, a reflection instead of a rotation.
     let err = Sc::new(
         robot(),
-        &[],
+        &[] as &[capp_core::Solid],
         &mission(Waypoint::at([f32::NAN, 0.0, 0.0]), Settings::default()),
     )
     .unwrap_err();
@@ -395,12 +395,16 @@ fn bad_inputs_are_errors_not_panics() {
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
     );
     assert!(matches!(
-        Sc::new(robot(), &[], &mission(mirror, Settings::default())),
+        Sc::new(
+            robot(),
+            &[] as &[capp_core::Solid],
+            &mission(mirror, Settings::default())
+        ),
         Err(ScenarioError::Mission(MissionError::NotARotation { .. }))
     ));
     let err = Sc::new(
         robot(),
-        &[],
+        &[] as &[capp_core::Solid],
         &Mission {
             waypoints: heapless::Vec::new(),
             settings: Settings::default(),
@@ -429,13 +433,22 @@ fn bad_inputs_are_errors_not_panics() {
         },
     ] {
         assert!(matches!(
-            Sc::new(robot(), &[], &mission(good_waypoint, broken)),
+            Sc::new(
+                robot(),
+                &[] as &[capp_core::Solid],
+                &mission(good_waypoint, broken)
+            ),
             Err(ScenarioError::Mission(MissionError::BadSetting(_)))
         ));
     }
 
     // Start configurations.
-    let sc = Sc::new(robot(), &[], &mission(good_waypoint, Settings::default())).unwrap();
+    let sc = Sc::new(
+        robot(),
+        &[] as &[capp_core::Solid],
+        &mission(good_waypoint, Settings::default()),
+    )
+    .unwrap();
     let mut q = pips::home();
     q[3] = f32::INFINITY;
     assert_eq!(

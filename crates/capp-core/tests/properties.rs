@@ -402,7 +402,11 @@ fn check_run(sc: &Sc, start: &[f32]) -> Result<Outcome, TestCaseError> {
         s.avoidance.link_margin as f64,
     );
     let interior = s.avoidance.points_per_link as usize;
-    let obstacles: Vec<SuperEllipsoid> = sc.obstacles().iter().map(|o| *o.source()).collect();
+    let obstacles: Vec<SuperEllipsoid> = sc
+        .obstacles()
+        .iter()
+        .map(|o| o.source().super_ellipsoid().expect("a super-ellipsoid"))
+        .collect();
     // The planner decides in f32; exact (f64) arithmetic may put a point that
     // f32 saw a hair outside a hair inside. The check allows the f32 rounding
     // of the positions and nothing more: it evaluates obstacles inflated by the

@@ -23,7 +23,7 @@ fn scenario(joints: &[Joint], target: [f32; 3], capsules: bool) -> Sc {
     let settings = Settings::for_robot(&robot);
     let mut sc = Sc::new(
         robot,
-        &[],
+        &[] as &[capp_core::Solid],
         &Mission::new(&[Waypoint::at(target)], settings).unwrap(),
     )
     .unwrap();
@@ -182,7 +182,7 @@ fn pips_between_random_configurations_keeps_its_links_apart() {
         settings.max_steps = 1500;
         let mut sc = Sc::new(
             robot,
-            &[],
+            &[] as &[capp_core::Solid],
             &Mission::new(&[Waypoint::pose(p, r)], settings).unwrap(),
         )
         .unwrap();

@@ -108,7 +108,7 @@ pub struct Upload<'a> {
     /// its own and is not sent again).
     pub drive: &'a [capp_core::tracker::limits::DriveLimits],
     /// The obstacles.
-    pub obstacles: &'a [capp_core::SuperEllipsoid],
+    pub obstacles: &'a [capp_core::Solid],
     /// The waypoints (the last is the target).
     pub waypoints: &'a [capp_core::Waypoint],
     /// Which of them are joint configurations: (waypoint index, one value per

@@ -83,7 +83,7 @@ use capp_core::scenario::MAX_JOINT_GOALS;
 use capp_core::setpoint::Decimator;
 use capp_core::{
     MissionError, Motion, ObstacleError, Phase, Planner, RobotError, Scenario, ScenarioError,
-    SetpointFilter, StartError, SuperEllipsoid,
+    SetpointFilter, Solid, StartError,
 };
 use capp_proto::{
     Command, ErrorCode, EscapeMode, Feed, FrameError, Joints, Part, Preset, Reply, State, Status,
@@ -109,7 +109,7 @@ pub trait Ticker {
 #[derive(Clone, Debug)]
 struct Draft {
     joints: Vec<capp_core::Joint, N>,
-    obstacles: Vec<SuperEllipsoid, M>,
+    obstacles: Vec<Solid, M>,
     waypoints: Vec<capp_core::Waypoint, W>,
     /// Waypoints that are joint configurations: (waypoint index, values).
     joint_goals: Vec<(u8, Vec<f32, N>), MAX_JOINT_GOALS>,
@@ -240,7 +240,7 @@ impl Draft {
                 let ok = [o.centre, o.semi_axes, o.exponents, o.euler_123]
                     .iter()
                     .all(|v| finite(v));
-                append(&mut d.obstacles, *index, SuperEllipsoid::from(o), ok)?;
+                append(&mut d.obstacles, *index, Solid::from(o), ok)?;
             }
             Command::Waypoint { index, waypoint } => {
                 let w = *waypoint;
@@ -946,7 +946,8 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
                 ObstacleError::NotFinite { obstacle, .. }
                 | ObstacleError::SemiAxisOutOfRange { obstacle }
                 | ObstacleError::CentreOutOfRange { obstacle }
-                | ObstacleError::ExponentOutOfRange { obstacle } => obstacle,
+                | ObstacleError::ExponentOutOfRange { obstacle }
+                | ObstacleError::SizeOutOfRange { obstacle } => obstacle,
             };
             (ErrorCode::InvalidObstacle, index)
         }

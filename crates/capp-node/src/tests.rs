@@ -105,7 +105,8 @@ fn host_plan() -> Vec<(Vec<f32>, f32)> {
 fn host_plan_with(settings: capp_core::Settings) -> Vec<(Vec<f32>, f32)> {
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(&[target()], settings).unwrap();
-    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut out = std::vec![(planner.joints().to_vec(), 0.0)];
     let mut time_s = 0.0f32;
@@ -265,7 +266,8 @@ fn the_listing_rule_streams_what_the_host_decimator_picks() {
     // The host: the same plan through capp-core's decimator.
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
-    let scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut decimator = capp_core::setpoint::Decimator::new(listing);
     let mut expected = Vec::new();
@@ -527,7 +529,8 @@ fn a_joint_space_waypoint_is_planned_as_the_host_plans_it() {
         capp_core::Settings::default(),
     )
     .unwrap();
-    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     scenario.set_joint_goal(0, &goal).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut expected = std::vec![planner.joints().to_vec()];
@@ -638,7 +641,8 @@ fn link_capsules_reach_the_boards_scenario_bit_for_bit() {
     // The host's plan with the same capsules.
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
-    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     scenario.set_link_capsules(&radius, &rows).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut expected = std::vec![planner.joints().to_vec()];
@@ -818,7 +822,8 @@ fn a_start_in_self_collision_is_refused() {
         capp_core::Settings::for_robot(&robot),
     )
     .unwrap();
-    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     scenario
         .set_link_capsules(&[0.1; 3], &[1 << 2, 0, 0])
         .unwrap();

@@ -5,12 +5,13 @@ use capp_core::avoidance::AvoidanceSettings;
 use capp_core::control::{LawKind as CoreLaw, LawSettings};
 use capp_core::escape::EscapeSettings;
 use capp_core::planner::Outcome as CoreOutcome;
-use capp_core::{JointKind as CoreKind, SuperEllipsoid};
+use capp_core::{JointKind as CoreKind, Shape, Solid, SuperEllipsoid};
 
 use capp_core::robot::{JointOrigin, Placement as CorePlacement};
 
 use crate::{
-    EscapeMode, Joint, JointKind, LawKind, Obstacle, Origin, Outcome, Placement, Settings, Waypoint,
+    EscapeMode, Joint, JointKind, LawKind, Obstacle, Origin, Outcome, Placement, Primitive,
+    Settings, Waypoint,
 };
 
 impl From<CorePlacement> for Placement {
@@ -101,24 +102,60 @@ impl From<Joint> for capp_core::Joint {
     }
 }
 
-impl From<SuperEllipsoid> for Obstacle {
-    fn from(s: SuperEllipsoid) -> Self {
+impl From<Solid> for Obstacle {
+    fn from(s: Solid) -> Self {
+        let (semi_axes, exponents, primitive) = match s.shape {
+            Shape::SuperEllipsoid {
+                semi_axes,
+                exponents,
+            } => (semi_axes, exponents, None),
+            Shape::Sphere { radius } => ([0.0; 3], [0.0; 3], Some(Primitive::Sphere { radius })),
+            Shape::Cuboid { half_extents } => {
+                ([0.0; 3], [0.0; 3], Some(Primitive::Cuboid { half_extents }))
+            }
+            Shape::Capsule { radius, length } => (
+                [0.0; 3],
+                [0.0; 3],
+                Some(Primitive::Capsule { radius, length }),
+            ),
+            Shape::Cylinder { radius, length } => (
+                [0.0; 3],
+                [0.0; 3],
+                Some(Primitive::Cylinder { radius, length }),
+            ),
+        };
         Obstacle {
             centre: s.centre,
-            semi_axes: s.semi_axes,
-            exponents: s.exponents,
+            semi_axes,
+            exponents,
             euler_123: s.euler_123,
+            primitive,
         }
     }
 }
 
-impl From<Obstacle> for SuperEllipsoid {
+impl From<SuperEllipsoid> for Obstacle {
+    fn from(s: SuperEllipsoid) -> Self {
+        Solid::from(s).into()
+    }
+}
+
+impl From<Obstacle> for Solid {
     fn from(o: Obstacle) -> Self {
-        SuperEllipsoid {
+        let shape = match o.primitive {
+            None => Shape::SuperEllipsoid {
+                semi_axes: o.semi_axes,
+                exponents: o.exponents,
+            },
+            Some(Primitive::Sphere { radius }) => Shape::Sphere { radius },
+            Some(Primitive::Cuboid { half_extents }) => Shape::Cuboid { half_extents },
+            Some(Primitive::Capsule { radius, length }) => Shape::Capsule { radius, length },
+            Some(Primitive::Cylinder { radius, length }) => Shape::Cylinder { radius, length },
+        };
+        Solid {
             centre: o.centre,
-            semi_axes: o.semi_axes,
-            exponents: o.exponents,
             euler_123: o.euler_123,
+            shape,
         }
     }
 }

@@ -37,7 +37,7 @@ pub use frame::{decode, decode_command, encode, Accumulator, Feed, FrameError, M
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 9;
+pub const VERSION: u8 = 10;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -115,18 +115,53 @@ pub struct Joint {
     pub origin: Option<Origin>,
 }
 
-/// A super-ellipsoid obstacle (capp-core's `SuperEllipsoid`).
+/// An obstacle (capp-core's `Solid`): a super-ellipsoid, or since version
+/// 10 a primitive measured on true distance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Obstacle {
     /// Centre.
     pub centre: [f32; 3],
-    /// Semi-axes.
+    /// Semi-axes (a super-ellipsoid's; zeros for a primitive).
     pub semi_axes: [f32; 3],
-    /// Exponents.
+    /// Exponents (a super-ellipsoid's; zeros for a primitive).
     pub exponents: [f32; 3],
     /// Euler angles (1-2-3), radians.
     pub euler_123: [f32; 3],
+    /// The primitive, or none: the super-ellipsoid of `semi_axes` and
+    /// `exponents` (since version 10).
+    pub primitive: Option<Primitive>,
+}
+
+/// A CAD primitive in its own frame (capp-core's `Shape`, but the
+/// super-ellipsoid), sizes in length units; since version 10.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Primitive {
+    /// 0: a ball.
+    Sphere {
+        /// Radius.
+        radius: f32,
+    },
+    /// 1: a box.
+    Cuboid {
+        /// Half-extents along the obstacle's x, y, z.
+        half_extents: [f32; 3],
+    },
+    /// 2: a capsule along z.
+    Capsule {
+        /// Radius.
+        radius: f32,
+        /// The segment's full length.
+        length: f32,
+    },
+    /// 3: a cylinder along z, flat ends.
+    Cylinder {
+        /// Radius.
+        radius: f32,
+        /// Full length.
+        length: f32,
+    },
 }
 
 /// A waypoint: a position and optionally a rotation matrix, row by row.

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 09 00 01, CRC-32 0x8797d20b (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 0A 00 01, CRC-32 0x85d16c52 (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x09, 0x06, 0x01, 0x0b, 0xd2, 0x97, 0x87, 0x00]
+        &[0x02, 0x0a, 0x06, 0x01, 0x52, 0x6c, 0xd1, 0x85, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x09, 0x01, 0x08, 0xee, 0x5b, 0x50, 0xe7, 0x00]
+        &[0x08, 0x0a, 0x01, 0x08, 0xb7, 0xe5, 0x16, 0xe5, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x09, 0x02, 0xff, 0x01, 0xff, 0xc6, 0xb7, 0xba, 0xeb, 0x00]
+        &[0x0a, 0x0a, 0x02, 0xff, 0x01, 0xff, 0x16, 0xcd, 0x1a, 0xac, 0x00]
     );
 }
 
@@ -183,6 +183,7 @@ fn every_command_is_pinned() {
         semi_axes: [2.0, 2.0, 0.5],
         exponents: [2.0, 2.0, 2.0],
         euler_123: [0.0, 0.0, 1.0],
+        primitive: None,
     };
     check(
         &Command::Obstacle {
@@ -203,6 +204,43 @@ fn every_command_is_pinned() {
             &ZERO,
             &ZERO,
             &ONE,
+            &[0x00],
+        ]),
+    );
+    // A capsule (since version 10): the super-ellipsoid's fields zero, then
+    // `Some` (1), the variant (2) and its radius and length.
+    let capsule = Obstacle {
+        centre: [1.0, -1.0, 0.0],
+        semi_axes: [0.0; 3],
+        exponents: [0.0; 3],
+        euler_123: [0.0, 0.0, 1.0],
+        primitive: Some(Primitive::Capsule {
+            radius: 0.5,
+            length: 2.0,
+        }),
+    };
+    check(
+        &Command::Obstacle {
+            index: 2,
+            obstacle: capsule,
+        },
+        &cat(&[
+            &[0x04, 0x02],
+            &ONE,
+            &MINUS_ONE,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &ONE,
+            &[0x01, 0x02],
+            &HALF,
+            &TWO,
         ]),
     );
     check(
@@ -391,7 +429,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x09, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x0a, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [

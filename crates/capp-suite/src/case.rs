@@ -113,29 +113,132 @@ fn toml_string(s: &str) -> String {
     format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
-/// A super-ellipsoid (eq. 25), lengths in the file's unit, Euler angles in radians.
+/// An obstacle: a shape placed at a centre, lengths in the file's unit,
+/// Euler angles in radians.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Obstacle {
     /// Name (says what it is: "floor", "shelf board 2", "in the way (joint path)").
     pub name: String,
     /// Centre.
     pub centre: [f64; 3],
-    /// Semi-axes.
-    pub semi_axes: [f64; 3],
-    /// Exponents.
-    pub exponents: [f64; 3],
+    /// The shape in its own frame.
+    pub shape: Form,
     /// 1-2-3 Euler angles, `R = Rz Ry Rx`.
     pub euler: [f64; 3],
 }
 
+/// An obstacle's shape in its own frame (capp-core's `Shape`, in `f64`;
+/// capsules and cylinders along z).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Form {
+    /// Eq. 25.
+    SuperEllipsoid {
+        /// Semi-axes.
+        semi_axes: [f64; 3],
+        /// Exponents.
+        exponents: [f64; 3],
+    },
+    /// A ball.
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// A true box.
+    Cuboid {
+        /// Half-extents.
+        half_extents: [f64; 3],
+    },
+    /// A capsule of segment `length` along z.
+    Capsule {
+        /// Radius.
+        radius: f64,
+        /// The segment's length.
+        length: f64,
+    },
+    /// A cylinder along z, flat ends.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Length.
+        length: f64,
+    },
+}
+
+impl Form {
+    /// capp-core's shape (`f32`).
+    pub fn core(&self) -> capp_core::Shape {
+        use capp_core::Shape as S;
+        let f = |x: f64| x as f32;
+        match *self {
+            Form::SuperEllipsoid {
+                semi_axes,
+                exponents,
+            } => S::SuperEllipsoid {
+                semi_axes: semi_axes.map(f),
+                exponents: exponents.map(f),
+            },
+            Form::Sphere { radius } => S::Sphere { radius: f(radius) },
+            Form::Cuboid { half_extents } => S::Cuboid {
+                half_extents: half_extents.map(f),
+            },
+            Form::Capsule { radius, length } => S::Capsule {
+                radius: f(radius),
+                length: f(length),
+            },
+            Form::Cylinder { radius, length } => S::Cylinder {
+                radius: f(radius),
+                length: f(length),
+            },
+        }
+    }
+
+    /// The scenario file's keys for the shape (`shape = ...` and its sizes).
+    fn toml(&self) -> String {
+        match self {
+            Form::SuperEllipsoid {
+                semi_axes,
+                exponents,
+            } => format!(
+                "semi_axes = {}\nexponents = {}",
+                list(semi_axes),
+                list(exponents)
+            ),
+            Form::Sphere { radius } => format!("shape = \"sphere\"\nradius = {}", num(*radius)),
+            Form::Cuboid { half_extents } => {
+                format!("shape = \"box\"\nhalf_extents = {}", list(half_extents))
+            }
+            Form::Capsule { radius, length } => {
+                let (r, l) = (num(*radius), num(*length));
+                format!("shape = \"capsule\"\nradius = {r}\nlength = {l}")
+            }
+            Form::Cylinder { radius, length } => {
+                let (r, l) = (num(*radius), num(*length));
+                format!("shape = \"cylinder\"\nradius = {r}\nlength = {l}")
+            }
+        }
+    }
+}
+
 impl Obstacle {
-    /// A box (exponent 8), axis aligned.
+    /// A box (a super-ellipsoid of exponent 8), axis aligned.
     pub fn cuboid(name: impl Into<String>, centre: [f64; 3], semi_axes: [f64; 3]) -> Self {
         Obstacle {
             name: name.into(),
             centre,
-            semi_axes,
-            exponents: [8.0; 3],
+            shape: Form::SuperEllipsoid {
+                semi_axes,
+                exponents: [8.0; 3],
+            },
+            euler: [0.0; 3],
+        }
+    }
+
+    /// A shape placed at `centre`, axis aligned.
+    pub fn solid(name: impl Into<String>, centre: [f64; 3], shape: Form) -> Self {
+        Obstacle {
+            name: name.into(),
+            centre,
+            shape,
             euler: [0.0; 3],
         }
     }
@@ -155,8 +258,10 @@ impl Obstacle {
         Obstacle {
             name: name.into(),
             centre,
-            semi_axes,
-            exponents,
+            shape: Form::SuperEllipsoid {
+                semi_axes,
+                exponents,
+            },
             euler: [0.0; 3],
         }
     }
@@ -298,11 +403,10 @@ impl Spec {
         for o in &self.obstacles {
             let _ = writeln!(
                 s,
-                "\n[[obstacles]]\nname = \"{}\"\ncentre = {}\nsemi_axes = {}\nexponents = {}",
+                "\n[[obstacles]]\nname = \"{}\"\ncentre = {}\n{}",
                 o.name,
                 list(&o.centre),
-                list(&o.semi_axes),
-                list(&o.exponents)
+                o.shape.toml()
             );
             if o.euler != [0.0; 3] {
                 let _ = writeln!(s, "euler = {}", list(&o.euler));

@@ -34,7 +34,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use capp_core::{Joint, JointKind, SetpointFilter, Settings, SuperEllipsoid, Waypoint};
+use capp_core::{Joint, JointKind, SetpointFilter, Settings, Solid, SuperEllipsoid, Waypoint};
 
 use crate::problem::{Lines, LoadError, Problem, SourceKind};
 
@@ -253,12 +253,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             }
             *slot = x as f32;
         }
-        obstacles.push(SuperEllipsoid {
+        obstacles.push(Solid::from(SuperEllipsoid {
             centre: [v[0], v[1], v[2]],
             semi_axes: [v[3], v[4], v[5]],
             exponents: [v[6], v[7], v[8]],
             euler_123: [v[9], v[10], v[11]],
-        });
+        }));
         obstacle_lines.push(Some(first));
     }
     if let Some(&(line, token)) = t.items.get(t.next) {

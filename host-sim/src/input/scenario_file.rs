@@ -16,7 +16,7 @@ use std::path::Path;
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
 use capp_core::{
-    pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, SuperEllipsoid, Waypoint,
+    pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, Shape, Solid, Waypoint,
 };
 use serde::Deserialize;
 use toml::Spanned;
@@ -195,12 +195,98 @@ struct PoseSpec {
 struct ObstacleSpec {
     #[serde(default)]
     name: String,
+    /// `superellipsoid` (the default), `sphere`, `box`, `capsule`, `cylinder`.
+    shape: Option<String>,
     centre: [f64; 3],
-    semi_axes: [f64; 3],
+    semi_axes: Option<[f64; 3]>,
     exponents: Option<[f64; 3]>,
     exponent: Option<f64>,
+    radius: Option<f64>,
+    length: Option<f64>,
+    half_extents: Option<[f64; 3]>,
     #[serde(default)]
     euler: [f64; 3],
+}
+
+impl ObstacleSpec {
+    /// The shape the keys describe, or why not: each shape takes its own
+    /// keys and no other's.
+    fn shape(&self) -> Result<Shape, String> {
+        let kind = self.shape.as_deref().unwrap_or("superellipsoid");
+        let given = [
+            ("semi_axes", self.semi_axes.is_some()),
+            ("exponents", self.exponents.is_some()),
+            ("exponent", self.exponent.is_some()),
+            ("radius", self.radius.is_some()),
+            ("length", self.length.is_some()),
+            ("half_extents", self.half_extents.is_some()),
+        ];
+        let takes: &[&str] = match kind {
+            "superellipsoid" => &["semi_axes", "exponents", "exponent"],
+            "sphere" => &["radius"],
+            "box" => &["half_extents"],
+            "capsule" | "cylinder" => &["radius", "length"],
+            "convex" | "mesh" => {
+                return Err(format!(
+                    "obstacle: shape \"{kind}\" is not supported yet (sphere, box, capsule, cylinder and superellipsoid are)"
+                ))
+            }
+            other => {
+                return Err(format!(
+                    "obstacle: unknown shape \"{other}\" (superellipsoid, sphere, box, capsule, cylinder)"
+                ))
+            }
+        };
+        if let Some((key, _)) = given.iter().find(|(key, set)| *set && !takes.contains(key)) {
+            return Err(format!(
+                "obstacle: `{key}` is not a key of shape \"{kind}\""
+            ));
+        }
+        let missing = |key: &str| format!("obstacle: shape \"{kind}\" needs `{key}`");
+        let f = |x: f64| x as f32;
+        Ok(match kind {
+            "superellipsoid" => {
+                let semi_axes = self.semi_axes.ok_or_else(|| missing("semi_axes"))?;
+                let exponents = match (self.exponents, self.exponent) {
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            "obstacle: give either `exponents` or `exponent`, not both".into()
+                        )
+                    }
+                    (Some(k), None) => k,
+                    (None, Some(k)) => [k; 3],
+                    (None, None) => {
+                        return Err(
+                            "obstacle: missing `exponents` (or `exponent` for all three axes)"
+                                .into(),
+                        )
+                    }
+                };
+                Shape::SuperEllipsoid {
+                    semi_axes: semi_axes.map(f),
+                    exponents: exponents.map(f),
+                }
+            }
+            "sphere" => Shape::Sphere {
+                radius: f(self.radius.ok_or_else(|| missing("radius"))?),
+            },
+            "box" => Shape::Cuboid {
+                half_extents: self
+                    .half_extents
+                    .ok_or_else(|| missing("half_extents"))?
+                    .map(f),
+            },
+            _ => {
+                let radius = f(self.radius.ok_or_else(|| missing("radius"))?);
+                let length = f(self.length.ok_or_else(|| missing("length"))?);
+                if kind == "capsule" {
+                    Shape::Capsule { radius, length }
+                } else {
+                    Shape::Cylinder { radius, length }
+                }
+            }
+        })
+    }
 }
 
 #[derive(Deserialize, Default)]
@@ -777,27 +863,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     for spec in file.obstacles {
         let line = at(spec.span());
         let s = spec.into_inner();
-        let exponents = match (s.exponents, s.exponent) {
-            (Some(_), Some(_)) => {
-                return Err(err(
-                    line,
-                    "obstacle: give either `exponents` or `exponent`, not both".into(),
-                ))
-            }
-            (Some(k), None) => k,
-            (None, Some(k)) => [k; 3],
-            (None, None) => {
-                return Err(err(
-                    line,
-                    "obstacle: missing `exponents` (or `exponent` for all three axes)".into(),
-                ))
-            }
-        };
-        obstacles.push(SuperEllipsoid {
+        let shape = s.shape().map_err(|e| err(line, e))?;
+        obstacles.push(Solid {
             centre: s.centre.map(|x| x as f32),
-            semi_axes: s.semi_axes.map(|x| x as f32),
-            exponents: exponents.map(|x| x as f32),
             euler_123: s.euler.map(|x| (x * angle) as f32),
+            shape,
         });
         obstacle_names.push(s.name);
         obstacle_lines.push(Some(line));

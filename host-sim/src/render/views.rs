@@ -85,8 +85,23 @@ fn rotation(e: [f64; 3]) -> [[f64; 3]; 3] {
 /// `lon` points from the +z pole to the -z pole (of the obstacle's frame).
 pub fn surface(problem: &Problem, o: usize, lat: usize, lon: usize) -> Vec<[f64; 3]> {
     let s = &problem.obstacles[o];
-    let axes = s.semi_axes.map(f64::from);
-    let k = s.exponents.map(f64::from);
+    // Every shape is star-shaped about its centre: along each ray, the
+    // boundary is where the inside test changes.
+    let inside = |x: [f64; 3]| -> bool {
+        match s.shape {
+            capp_core::Shape::SuperEllipsoid {
+                semi_axes,
+                exponents,
+            } => {
+                (0..3)
+                    .map(|a| (x[a] / semi_axes[a] as f64).abs().powf(exponents[a] as f64))
+                    .sum::<f64>()
+                    <= 1.0
+            }
+            shape => crate::geometry::signed_distance(&shape, x) <= 0.0,
+        }
+    };
+    let reach = half_box(&s.shape).iter().cloned().fold(0.0, f64::max) * 2.0;
     let r = rotation(s.euler_123.map(f64::from));
     let c = s.centre.map(f64::from);
     let mut out = Vec::with_capacity((lat + 1) * lon);
@@ -95,12 +110,11 @@ pub fn surface(problem: &Problem, o: usize, lat: usize, lon: usize) -> Vec<[f64;
         for j in 0..lon {
             let th = std::f64::consts::TAU * j as f64 / lon as f64;
             let d = [phi.sin() * th.cos(), phi.sin() * th.sin(), phi.cos()];
-            // Largest t with C(t d) <= 1, by bisection (C grows with t).
-            let f = |t: f64| -> f64 { (0..3).map(|a| (t * d[a] / axes[a]).abs().powf(k[a])).sum() };
-            let (mut lo, mut hi) = (0.0, axes.iter().cloned().fold(0.0, f64::max) * 2.0);
+            // Largest t with t d inside, by bisection.
+            let (mut lo, mut hi) = (0.0, reach);
             for _ in 0..40 {
                 let mid = 0.5 * (lo + hi);
-                if f(mid) <= 1.0 {
+                if inside(d.map(|v| v * mid)) {
                     lo = mid;
                 } else {
                     hi = mid;
@@ -111,6 +125,20 @@ pub fn surface(problem: &Problem, o: usize, lat: usize, lon: usize) -> Vec<[f64;
         }
     }
     out
+}
+
+/// Half-extents of the box about the centre that holds `shape`, in its own
+/// frame.
+pub fn half_box(shape: &capp_core::Shape) -> [f64; 3] {
+    use capp_core::Shape as S;
+    let [x, y, z] = match *shape {
+        S::SuperEllipsoid { semi_axes, .. } => semi_axes,
+        S::Sphere { radius } => [radius; 3],
+        S::Cuboid { half_extents } => half_extents,
+        S::Capsule { radius, length } => [radius, radius, 0.5 * length + radius],
+        S::Cylinder { radius, length } => [radius, radius, 0.5 * length],
+    };
+    [x, y, z].map(f64::from)
 }
 
 /// Convex hull (monotone chain), counter-clockwise in a y-up frame.

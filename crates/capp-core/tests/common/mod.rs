@@ -329,7 +329,11 @@ pub fn run_checked(sc: &Sc, start: &[f32]) -> Run {
         s.avoidance.link_margin as f64,
     );
     let interior = s.avoidance.points_per_link as usize;
-    let obstacles: Vec<SuperEllipsoid> = sc.obstacles().iter().map(|o| *o.source()).collect();
+    let obstacles: Vec<SuperEllipsoid> = sc
+        .obstacles()
+        .iter()
+        .map(|o| o.source().super_ellipsoid().expect("a super-ellipsoid"))
+        .collect();
     let mut planner = Planner::new(sc, start).unwrap();
     let mut previous = planner.joints().to_vec();
     let mut v = vec![planner.last_report().v];

@@ -38,7 +38,8 @@ type Drives<'a> = &'a [(f32, f32)];
 fn host_rows(settings: capp_core::Settings, drive: Drives) -> Vec<Row> {
     let robot = Robot::<32>::new(&pips::joints()).unwrap();
     let mission = Mission::<16>::new(&[target()], settings).unwrap();
-    let mut scenario = Scenario::<32, 64, 16>::new(robot, &[], &mission).unwrap();
+    let mut scenario =
+        Scenario::<32, 64, 16>::new(robot, &[] as &[capp_core::Solid], &mission).unwrap();
     if !drive.is_empty() {
         let (accel, jerk): (Vec<f32>, Vec<f32>) = drive.iter().copied().unzip();
         scenario.set_drive_limits(&accel, &jerk).unwrap();

@@ -77,7 +77,7 @@ fn a_general_robot_with_a_tool_plans_the_hosts_plan_bit_for_bit() {
     // The host's plan: the same robot, built as the host builds it.
     let host = Robot::<32>::new_with_tool(&joints, &tool).unwrap();
     let mission = Mission::<16>::new(&[target()], capp_core::Settings::default()).unwrap();
-    let scenario = Scenario::<32, 64, 16>::new(host, &[], &mission).unwrap();
+    let scenario = Scenario::<32, 64, 16>::new(host, &[] as &[capp_core::Solid], &mission).unwrap();
     let mut planner = Planner::new(&scenario, &pips::home()).unwrap();
     let mut expected = std::vec![bits(planner.joints())];
     loop {

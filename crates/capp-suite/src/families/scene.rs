@@ -8,7 +8,7 @@
 //! prints it) keeps its capsules `gap >= margin (r_a + r_b)` apart, by the
 //! independent `f64` model's capsules ([`Geometry::link_gaps`]).
 
-use capp_core::SuperEllipsoid;
+use capp_core::Solid;
 use capp_sim::geometry::{forward, Geometry};
 use capp_sim::Problem;
 
@@ -147,11 +147,10 @@ impl Draft {
 
     /// Adds an obstacle.
     pub fn push(&mut self, o: Obstacle) {
-        self.problem.obstacles.push(SuperEllipsoid {
+        self.problem.obstacles.push(Solid {
             centre: o.centre.map(|x| x as f32),
-            semi_axes: o.semi_axes.map(|x| x as f32),
-            exponents: o.exponents.map(|x| x as f32),
             euler_123: o.euler.map(|x| x as f32),
+            shape: o.shape.core(),
         });
         self.problem.obstacle_names.push(o.name.clone());
         self.spec.obstacles.push(o);

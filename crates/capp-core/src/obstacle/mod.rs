@@ -1,10 +1,13 @@
-//! Super-ellipsoid obstacles (paper eq. 25).
+//! Obstacles: the paper's super-ellipsoids (eq. 25) and the CAD primitives
+//! (sphere, box, capsule, cylinder) on true distances.
 //!
-//! Obstacle `j` has centre `c`, semi-axes `(a, b, c)`, exponents
-//! `(k_x, k_y, k_z) >= 1` and an orientation `R = Rz(rz) Ry(ry) Rx(rx)` from 1-2-3
-//! Euler angles (radians). A world point `p` is `x = R^T (p - c)` in the
+//! Obstacle `j` has centre `c` and an orientation `R = Rz(rz) Ry(ry) Rx(rx)` from
+//! 1-2-3 Euler angles (radians). A world point `p` is `x = R^T (p - c)` in the
 //! obstacle's frame (CAPP.c rotated `p` about the world origin instead, and
-//! cumulatively; that is its bug, not the method) and
+//! cumulatively; that is its bug, not the method).
+//!
+//! **Super-ellipsoids.** Semi-axes `(a, b, c)` and exponents
+//! `(k_x, k_y, k_z) >= 1`:
 //!
 //! ```text
 //! C(p) = |x/a|^kx + |y/b|^ky + |z/c|^kz          (eq. 25)
@@ -13,7 +16,6 @@
 //! is 1 on the surface, below 1 inside. Exponents 1 give an octahedron, 2 an
 //! ellipsoid, 8 nearly a box. The absolute values make odd and real exponents
 //! behave (the listing's `pow` without them only works for even integers).
-//!
 //! Avoidance points see the obstacle *inflated* by a clearance margin for the
 //! arm's thickness: the semi-axes grow by the margin of the point's kind
 //! ([`PointKind`]), as the listing's `+6.0` at joints and `+3.0` at link
@@ -23,8 +25,32 @@
 //! Integer exponents up to 32 take a multiply-only fast path; others use `powf`.
 //! `C` is never NaN: terms are non-negative and an overflowing one is `inf`, and
 //! any `C` above [`C_CUTOFF`] is treated as "out of influence".
+//!
+//! **Primitives** ([`Shape`]: sphere, box, capsule, cylinder) are measured by
+//! their true signed distance `d(p)` to the surface ([`distance`]), so a
+//! margin `m` is a distance: a point keeps `m` from every face, edge and
+//! corner alike. Their `C` is the super-ellipsoid's rebuilt on distance,
+//!
+//! ```text
+//! C(p) = ((d(p) + rho) / (m + rho))^2
+//! ```
+//!
+//! with `rho` the shape's inradius: 1 exactly where `d = m`, below 1 closer,
+//! convex (`d + rho >= 0` is convex and non-negative), and for a sphere of
+//! radius `rho` it is the ellipsoid `|x|^2 / (rho + m)^2` itself, so the
+//! potential (eq. 26), the projection and the engage threshold treat a
+//! primitive as they treat the exponent-2 super-ellipsoid of its size. The
+//! gradient is `2 (d + rho) / (m + rho)^2 grad d`, exact; the distance bound
+//! is the distance itself, `d - m`. Points farther than the influence
+//! distance from the inflated surface are out of influence.
 
 use crate::math::{max, rotation_123, vec3, Mat3, Vec3};
+
+pub mod distance;
+mod solid;
+
+use distance::{signed_distance, Primitive};
+pub use solid::{Shape, Solid};
 
 /// Largest `C` that still counts as "within influence"; the potential `1/(C-1)`
 /// there is below `1e-6` and its gradient negligible.
@@ -74,6 +100,8 @@ pub enum ObstacleParameter {
     Exponents,
     /// `euler_123`
     Orientation,
+    /// A primitive's sizes (radius, length, half-extents).
+    Size,
 }
 
 /// Why an obstacle was rejected. `obstacle` is 0-based.
@@ -107,6 +135,12 @@ pub enum ObstacleError {
         /// The obstacle.
         obstacle: u8,
     },
+    /// A primitive's radius, length or half-extent outside
+    /// `[MIN_SEMI_AXIS, MAX_EXTENT]`.
+    SizeOutOfRange {
+        /// The obstacle.
+        obstacle: u8,
+    },
 }
 
 impl core::fmt::Display for ObstacleParameter {
@@ -116,6 +150,7 @@ impl core::fmt::Display for ObstacleParameter {
             ObstacleParameter::SemiAxes => "semi-axes",
             ObstacleParameter::Exponents => "exponents",
             ObstacleParameter::Orientation => "orientation",
+            ObstacleParameter::Size => "size",
         })
     }
 }
@@ -142,6 +177,11 @@ impl core::fmt::Display for ObstacleError {
             ObstacleError::ExponentOutOfRange { obstacle } => write!(
                 f,
                 "obstacle {}: every exponent must be between 1 and {MAX_EXPONENT}",
+                obstacle as u32 + 1
+            ),
+            ObstacleError::SizeOutOfRange { obstacle } => write!(
+                f,
+                "obstacle {}: every radius, length and half-extent must be between {MIN_SEMI_AXIS} and {MAX_EXTENT}",
                 obstacle as u32 + 1
             ),
         }
@@ -385,6 +425,22 @@ struct Inflated {
     /// `reach - influence` (the inflated semi-axes, as the box bound has
     /// always computed them).
     inner: Vec3,
+    /// A primitive's margin `m`, length units (unused for super-ellipsoids).
+    margin: f32,
+    /// A primitive's `1 / (m + rho)` (unused for super-ellipsoids).
+    inv_scale: f32,
+}
+
+/// Half-extents of the smallest box about the centre, in the obstacle's own
+/// frame, that holds `s` (a super-ellipsoid's semi-axes), length units.
+fn half_box(s: &Solid) -> Vec3 {
+    match s.shape {
+        Shape::SuperEllipsoid { semi_axes, .. } => vec3(semi_axes),
+        Shape::Sphere { radius } => Vec3::repeat(radius),
+        Shape::Cuboid { half_extents } => vec3(half_extents),
+        Shape::Capsule { radius, length } => Vec3::new(radius, radius, 0.5 * length + radius),
+        Shape::Cylinder { radius, length } => Vec3::new(radius, radius, 0.5 * length),
+    }
 }
 
 /// A validated obstacle with everything a step needs precomputed; the data a
@@ -403,52 +459,84 @@ pub struct Obstacle {
     exponents: [Exponent; 3],
     /// `R` (obstacle axes in world coordinates, as columns).
     rotation: Mat3,
-    source: SuperEllipsoid,
+    /// The primitive measured on distance; `None` for a super-ellipsoid.
+    primitive: Option<Primitive>,
+    /// A primitive's inradius `rho`, length units.
+    inradius: f32,
+    /// The influence distance, length units.
+    influence: f32,
+    source: Solid,
 }
 
 impl Obstacle {
     /// Validates `s` (as obstacle number `index`) and inflates it by the
     /// margins (joint, link) and the influence distance, all non-negative
     /// finite lengths already checked by the caller.
-    pub fn new(
+    pub fn new<S: Into<Solid> + Copy>(
         index: u8,
-        s: &SuperEllipsoid,
+        s: &S,
         margins: [f32; 2],
         influence: f32,
     ) -> Result<Self, ObstacleError> {
+        let s: Solid = (*s).into();
         let obstacle = index;
         let not_finite = |field| ObstacleError::NotFinite { obstacle, field };
-        let groups = [
-            (s.centre, ObstacleParameter::Centre),
-            (s.semi_axes, ObstacleParameter::SemiAxes),
-            (s.exponents, ObstacleParameter::Exponents),
-            (s.euler_123, ObstacleParameter::Orientation),
-        ];
-        for (values, field) in groups {
-            if !values.iter().all(|v| v.is_finite()) {
-                return Err(not_finite(field));
-            }
+        let (sizes, count) = s.sizes();
+        let sizes = &sizes[..count];
+        let exponents = match s.shape {
+            Shape::SuperEllipsoid { exponents, .. } => exponents,
+            _ => [2.0; 3],
+        };
+        let size_field = match s.shape {
+            Shape::SuperEllipsoid { .. } => ObstacleParameter::SemiAxes,
+            _ => ObstacleParameter::Size,
+        };
+        if !s.centre.iter().all(|v| v.is_finite()) {
+            return Err(not_finite(ObstacleParameter::Centre));
         }
-        if !s
-            .semi_axes
+        if !sizes.iter().all(|v| v.is_finite()) {
+            return Err(not_finite(size_field));
+        }
+        if !exponents.iter().all(|v| v.is_finite()) {
+            return Err(not_finite(ObstacleParameter::Exponents));
+        }
+        if !s.euler_123.iter().all(|v| v.is_finite()) {
+            return Err(not_finite(ObstacleParameter::Orientation));
+        }
+        if !sizes
             .iter()
             .all(|&a| (MIN_SEMI_AXIS..=MAX_EXTENT).contains(&a))
         {
-            return Err(ObstacleError::SemiAxisOutOfRange { obstacle });
+            return Err(match s.shape {
+                Shape::SuperEllipsoid { .. } => ObstacleError::SemiAxisOutOfRange { obstacle },
+                _ => ObstacleError::SizeOutOfRange { obstacle },
+            });
         }
         if !s.centre.iter().all(|c| c.abs() <= MAX_EXTENT) {
             return Err(ObstacleError::CentreOutOfRange { obstacle });
         }
-        if !s
-            .exponents
-            .iter()
-            .all(|&k| (1.0..=MAX_EXPONENT).contains(&k))
-        {
+        if !exponents.iter().all(|&k| (1.0..=MAX_EXPONENT).contains(&k)) {
             return Err(ObstacleError::ExponentOutOfRange { obstacle });
         }
+        let primitive = match s.shape {
+            Shape::SuperEllipsoid { .. } => None,
+            Shape::Sphere { radius } => Some(Primitive::Sphere { radius }),
+            Shape::Cuboid { half_extents } => Some(Primitive::Cuboid {
+                half_extents: vec3(half_extents),
+            }),
+            Shape::Capsule { radius, length } => Some(Primitive::Capsule {
+                radius,
+                half_length: 0.5 * length,
+            }),
+            Shape::Cylinder { radius, length } => Some(Primitive::Cylinder {
+                radius,
+                half_length: 0.5 * length,
+            }),
+        };
+        let inradius = primitive.map_or(0.0, |p| p.inradius());
         let [rx, ry, rz] = s.euler_123;
         let rotation = rotation_123(rx, ry, rz);
-        let axes = vec3(s.semi_axes);
+        let axes = half_box(&s);
         let aligned = s.euler_123 == [0.0; 3];
         let inflated = margins.map(|m| {
             let inflated = axes.add_scalar(m);
@@ -464,21 +552,26 @@ impl Obstacle {
                 reach,
                 inv: inflated.map(|x| 1.0 / x),
                 inner: reach.map(|r| r - influence),
+                margin: m,
+                inv_scale: 1.0 / (m + inradius),
             }
         });
         Ok(Obstacle {
             centre: vec3(s.centre.map(|c| if c == 0.0 { -0.0 } else { c })),
             inflated,
             aligned,
-            powers: Powers::new(s.exponents),
-            exponents: s.exponents.map(Exponent::new),
+            powers: Powers::new(exponents),
+            exponents: exponents.map(Exponent::new),
             rotation,
-            source: *s,
+            primitive,
+            inradius,
+            influence,
+            source: s,
         })
     }
 
     /// The obstacle as given.
-    pub fn source(&self) -> &SuperEllipsoid {
+    pub fn source(&self) -> &Solid {
         &self.source
     }
 
@@ -496,7 +589,7 @@ impl Obstacle {
     /// shape's bounding box (`|semi-axes|`), length units: its size, for
     /// deciding whether to go round it.
     pub fn bounding_radius(&self) -> f32 {
-        let axes = self.source.semi_axes;
+        let axes = half_box(&self.source);
         crate::math::sqrt(axes.iter().map(|a| a * a).sum::<f32>())
     }
 
@@ -507,7 +600,7 @@ impl Obstacle {
         let local = self.rotation.transpose() * u;
         local
             .iter()
-            .zip(self.source.semi_axes)
+            .zip(half_box(&self.source).iter())
             .map(|(l, a)| l.abs() * (a + margin))
             .sum()
     }
@@ -517,9 +610,9 @@ impl Obstacle {
     /// of the semi-axes, and whether on that axis' positive side.
     pub fn side_of(&self, point: &Vec3) -> (u8, bool) {
         let x = self.rotation.transpose() * (point - self.centre());
-        let axes = self.source.semi_axes;
+        let axes = half_box(&self.source);
         let (mut axis, mut far, mut positive) = (0u8, f32::NEG_INFINITY, true);
-        for (i, (&xi, a)) in x.iter().zip(axes).enumerate() {
+        for (i, (&xi, &a)) in x.iter().zip(axes.iter()).enumerate() {
             let u = xi.abs() / max(a, f32::MIN_POSITIVE);
             if u > far {
                 (axis, far, positive) = (i as u8, u, xi >= 0.0);
@@ -607,6 +700,9 @@ impl Obstacle {
             }
             x
         };
+        if let Some(primitive) = &self.primitive {
+            return self.primitive_pair(primitive, inflated, &x);
+        }
         let (ax, ay, az) = (x.x.abs(), x.y.abs(), x.z.abs());
         let inv = &inflated.inv;
         // Per axis the term `|x/a|^k` and the gradient's component
@@ -705,9 +801,56 @@ impl Obstacle {
         }
     }
 
+    /// [`Obstacle::pair`] for a primitive, the local point `x` within its
+    /// influence box: `C` rebuilt on the signed distance (see the module
+    /// docs).
+    #[inline(never)]
+    fn primitive_pair(&self, primitive: &Primitive, inflated: &Inflated, x: &Vec3) -> Pair {
+        let (d, normal) = signed_distance(primitive, x);
+        let gap = d - inflated.margin;
+        // NaN (a point not finite) is out of influence too.
+        if gap > self.influence || gap.is_nan() {
+            return Pair::Far;
+        }
+        let (clearance, local_gradient) = self.rebuilt(d, &normal, inflated);
+        let gradient = if self.aligned {
+            local_gradient
+        } else {
+            self.rotation * local_gradient
+        };
+        if clearance <= 0.0 {
+            return Pair::Inside {
+                clearance,
+                gradient,
+            };
+        }
+        let distance = max(gap, 0.0);
+        let distance_sq = distance * distance;
+        if clearance >= C_CUTOFF || clearance.is_nan() {
+            return Pair::Beyond { distance_sq };
+        }
+        Pair::Near {
+            clearance,
+            gradient,
+            distance_sq,
+        }
+    }
+
+    /// `C - 1` and `grad C` (local frame) of a primitive from its signed
+    /// distance `d` and `grad d`: `C = ((d + rho) / (m + rho))^2`.
+    #[inline(always)]
+    fn rebuilt(&self, d: f32, normal: &Vec3, inflated: &Inflated) -> (f32, Vec3) {
+        let u = (d + self.inradius) * inflated.inv_scale;
+        (u * u - 1.0, normal * (2.0 * u * inflated.inv_scale))
+    }
+
     /// `C(p) - 1` with no influence cut-off (for reporting and checks; may be `inf`).
     pub fn clearance_uncut(&self, p: &Vec3, kind: PointKind) -> f32 {
         let x = self.rotation.tr_mul(&(p - self.centre()));
+        if let Some(primitive) = &self.primitive {
+            let (d, normal) = signed_distance(primitive, &x);
+            return self.rebuilt(d, &normal, &self.inflated[kind as usize]).0;
+        }
         let inv = &self.inflated[kind as usize].inv;
         let mut c = 0.0;
         for axis in 0..3 {
@@ -1070,5 +1213,163 @@ mod tests {
         let mut s = good;
         s.euler_123[0] = f32::INFINITY;
         assert!(matches!(check(s), ObstacleError::NotFinite { .. }));
+    }
+
+    /// One of each primitive, rotated, off the origin.
+    fn primitives() -> [Solid; 4] {
+        let place = |shape| Solid {
+            centre: [1.0, -2.0, 0.5],
+            euler_123: [0.3, -0.2, 0.9],
+            shape,
+        };
+        [
+            place(Shape::Sphere { radius: 1.5 }),
+            place(Shape::Cuboid {
+                half_extents: [2.0, 0.5, 1.0],
+            }),
+            place(Shape::Capsule {
+                radius: 0.5,
+                length: 3.0,
+            }),
+            place(Shape::Cylinder {
+                radius: 0.75,
+                length: 2.5,
+            }),
+        ]
+    }
+
+    #[test]
+    fn margins_of_primitives_are_true_distances() {
+        // Clearance is 0 exactly where the distance to the surface is the
+        // point kind's margin, and `distance_sq` is the distance to that
+        // inflated surface.
+        let mut rng = 17u64;
+        let margins = [0.6, 0.3];
+        for solid in primitives() {
+            let o = Obstacle::new(0, &solid, margins, 5.0).unwrap();
+            let (shape, rotation) = (o.primitive.unwrap(), *o.rotation());
+            for _ in 0..400 {
+                let p = o.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 5.0;
+                let local = rotation.transpose() * (p - o.centre());
+                let (d, _) = distance::signed_distance(&shape, &local);
+                for kind in [PointKind::Joint, PointKind::Link] {
+                    let m = margins[kind as usize];
+                    let Some(c) = o.contact(&p, kind) else {
+                        assert!(d - m > 5.0 - 1e-4, "{solid:?}: {p:?} dropped at {d}");
+                        continue;
+                    };
+                    assert_eq!(c.clearance <= 0.0, d <= m, "{solid:?} {p:?} {d} {c:?}");
+                    let expected = (d - m).max(0.0);
+                    assert!((c.distance_sq.sqrt() - expected).abs() < 1e-5);
+                    let uncut = o.clearance_uncut(&p, kind);
+                    assert!((uncut - c.clearance).abs() <= 1e-6 * (1.0 + uncut.abs()));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn primitive_gradients_match_central_differences() {
+        let mut rng = 23u64;
+        let step = 1e-3;
+        for solid in primitives() {
+            let o = Obstacle::new(0, &solid, [0.6, 0.3], 5.0).unwrap();
+            let mut checked = 0;
+            while checked < 100 {
+                let p = o.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 4.0;
+                let Some(c) = o.contact(&p, PointKind::Link) else {
+                    continue;
+                };
+                let f = |q: Vec3| o.clearance_uncut(&q, PointKind::Link);
+                let central = Vec3::from_fn(|i, _| {
+                    let (mut a, mut b) = (p, p);
+                    a[i] += step;
+                    b[i] -= step;
+                    (f(a) - f(b)) / (2.0 * step)
+                });
+                let forward = Vec3::from_fn(|i, _| {
+                    let mut a = p;
+                    a[i] += step;
+                    (f(a) - f(p)) / step
+                });
+                // Off the creases (edges, medial surfaces), where d is smooth.
+                if (forward - central).norm() > 0.02 * (1.0 + central.norm()) {
+                    continue;
+                }
+                checked += 1;
+                assert!(
+                    (c.gradient - central).norm() <= 1e-2 * (1.0 + central.norm()),
+                    "{solid:?} at {p:?}: {:?} against {central:?}",
+                    c.gradient
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_sphere_is_the_exponent_2_super_ellipsoid_of_its_size() {
+        // The potential treats a primitive as it treats the ellipsoid: for
+        // a sphere the rebuilt C is the super-ellipsoid's own.
+        let mut rng = 29u64;
+        let sphere = Obstacle::new(
+            0,
+            &Solid::aligned([1.0, 2.0, 3.0], Shape::Sphere { radius: 2.0 }),
+            [0.5, 0.25],
+            10.0,
+        )
+        .unwrap();
+        let ellipsoid = Obstacle::new(
+            0,
+            &SuperEllipsoid::aligned([1.0, 2.0, 3.0], [2.0; 3], 2.0),
+            [0.5, 0.25],
+            10.0,
+        )
+        .unwrap();
+        for _ in 0..200 {
+            let p = sphere.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 6.0;
+            for kind in [PointKind::Joint, PointKind::Link] {
+                let (a, b) = (
+                    sphere.clearance_uncut(&p, kind),
+                    ellipsoid.clearance_uncut(&p, kind),
+                );
+                assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{p:?}: {a} {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_bad_primitives() {
+        let check = |shape| Obstacle::new(2, &Solid::aligned([0.0; 3], shape), [0.0; 2], 1.0);
+        for shape in [
+            Shape::Sphere { radius: 0.0 },
+            Shape::Sphere { radius: -1.0 },
+            Shape::Cuboid {
+                half_extents: [1.0, 2e4, 1.0],
+            },
+            Shape::Capsule {
+                radius: 1.0,
+                length: 0.0,
+            },
+            Shape::Cylinder {
+                radius: 0.0,
+                length: 1.0,
+            },
+        ] {
+            assert_eq!(
+                check(shape).unwrap_err(),
+                ObstacleError::SizeOutOfRange { obstacle: 2 }
+            );
+        }
+        assert_eq!(
+            check(Shape::Cylinder {
+                radius: f32::NAN,
+                length: 1.0
+            })
+            .unwrap_err(),
+            ObstacleError::NotFinite {
+                obstacle: 2,
+                field: ObstacleParameter::Size
+            }
+        );
     }
 }
