@@ -325,6 +325,102 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
     }
 }
 
+/// Instructions of one point / obstacle evaluation (`Obstacle::contact`)
+/// for each shape, of PIPS size (inches, the listing's margins and 24 in of
+/// influence), aligned and turned: the mean over 96 points around the shape
+/// within its influence (each timed over 16 repetitions). One line per
+/// shape, `obstacles` = 1, `what` = `contact_<shape>_<aligned|turned>`.
+fn shape_costs() {
+    use capp_core::obstacle::{Obstacle, PointKind};
+    use capp_core::{Shape, Solid};
+    let shapes = [
+        (
+            "superellipsoid8",
+            Shape::SuperEllipsoid {
+                semi_axes: [20.0, 15.0, 10.0],
+                exponents: [8.0; 3],
+            },
+        ),
+        (
+            "superellipsoid2",
+            Shape::SuperEllipsoid {
+                semi_axes: [20.0, 15.0, 10.0],
+                exponents: [2.0; 3],
+            },
+        ),
+        ("sphere", Shape::Sphere { radius: 15.0 }),
+        (
+            "box",
+            Shape::Cuboid {
+                half_extents: [20.0, 15.0, 10.0],
+            },
+        ),
+        (
+            "capsule",
+            Shape::Capsule {
+                radius: 10.0,
+                length: 30.0,
+            },
+        ),
+        (
+            "cylinder",
+            Shape::Cylinder {
+                radius: 12.0,
+                length: 36.0,
+            },
+        ),
+    ];
+    for (label, shape) in shapes {
+        for (turn, euler_123) in [("aligned", [0.0; 3]), ("turned", [0.3, -0.5, 0.9])] {
+            let solid = Solid {
+                centre: [100.0, -40.0, 30.0],
+                euler_123,
+                shape,
+            };
+            let Ok(obstacle) = Obstacle::new(0, &solid, [6.0, 3.0], 24.0) else {
+                continue;
+            };
+            let (mut total, mut within) = (0u64, 0u64);
+            // A spiral of directions, at 1.2 x the shape's size from its
+            // centre: points outside the inflated shape, within influence.
+            for i in 0..96u32 {
+                let z = 1.0 - (2.0 * i as f32 + 1.0) / 96.0;
+                let ring = capp_core::math::sqrt(1.0 - z * z);
+                let (s, c) = capp_core::math::sin_cos(2.399_963 * i as f32);
+                let r = 30.0;
+                let point = capp_core::math::Vec3::new(
+                    100.0 + r * ring * c,
+                    -40.0 + r * ring * s,
+                    30.0 + r * z,
+                );
+                if obstacle.contact(&point, PointKind::Link).is_none() {
+                    continue;
+                }
+                let mut hit = false;
+                total += repeat(
+                    16,
+                    &mut hit,
+                    |_| {},
+                    |h| {
+                        *h = black_box(obstacle.contact(black_box(&point), PointKind::Link))
+                            .is_some();
+                    },
+                );
+                within += 1;
+            }
+            if let Some(mean) = total.checked_div(within) {
+                hprintln!(
+                    "M4F shape 0 1 contact_{}_{} {}.{}",
+                    label,
+                    turn,
+                    mean / 10,
+                    mean % 10
+                );
+            }
+        }
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let cp = cortex_m::Peripherals::take().unwrap();
@@ -349,6 +445,9 @@ fn main() -> ! {
             c,
         );
     }
+
+    // What each obstacle shape costs per point / obstacle pair (issue 24).
+    shape_costs();
 
     // Memory of the planner: model (scenario) and workspace (planner).
     line(

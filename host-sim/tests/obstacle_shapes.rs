@@ -236,3 +236,49 @@ fn bad_shapes_get_one_line_errors_at_their_line() {
         assert!(msg.contains(needle), "{keys}: {msg} lacks {needle}");
     }
 }
+
+#[test]
+fn pictures_draw_each_primitive_as_it_is() {
+    // Every vertex of the drawn surface is on the shape's surface, and a
+    // box's eight corners are among them (sharp edges, not rounded).
+    use capp_sim::render::views::primitive_surface;
+    let p = load(SHAPES).unwrap();
+    for solid in &p.obstacles {
+        if matches!(solid.shape, Shape::SuperEllipsoid { .. }) {
+            continue;
+        }
+        let vertices = primitive_surface(&solid.shape, 24, 48);
+        assert_eq!(vertices.len(), 25 * 48);
+        for v in &vertices {
+            let d = signed_distance(&solid.shape, *v);
+            assert!(d.abs() < 1e-6, "{:?}: {v:?} at {d}", solid.shape);
+        }
+        if let Shape::Cuboid { half_extents: h } = solid.shape {
+            for corner in 0..8 {
+                let c = [0, 1, 2].map(|a| {
+                    let s = if corner >> a & 1 == 1 { -1.0 } else { 1.0 };
+                    s * h[a] as f64
+                });
+                assert!(
+                    vertices
+                        .iter()
+                        .any(|v| (0..3).all(|a| (v[a] - c[a]).abs() < 1e-9)),
+                    "corner {c:?} drawn"
+                );
+            }
+        }
+    }
+    // And the world-frame surface the pictures and the viewer use is the
+    // same outline moved to the obstacle's pose: its centroid is the centre.
+    for o in 0..p.obstacles.len() {
+        let xyz = capp_sim::render::views::surface(&p, o, 24, 48);
+        let mean = [0, 1, 2].map(|a| xyz.iter().map(|v| v[a]).sum::<f64>() / xyz.len() as f64);
+        let c = p.obstacles[o].centre.map(f64::from);
+        // Symmetric outlines: the mean of the vertices is the centre.
+        assert!(
+            (0..3).all(|a| (mean[a] - c[a]).abs() < 1e-3),
+            "{:?}: {mean:?} against {c:?}",
+            p.obstacles[o].shape
+        );
+    }
+}

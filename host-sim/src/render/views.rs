@@ -83,48 +83,136 @@ fn rotation(e: [f64; 3]) -> [[f64; 3]; 3] {
 
 /// Surface samples of obstacle `o` in world coordinates: `lat + 1` rings of
 /// `lon` points from the +z pole to the -z pole (of the obstacle's frame).
+/// A super-ellipsoid is sampled along rays from its centre; a primitive is
+/// drawn as it is ([`primitive_surface`]: flat faces, sharp edges).
 pub fn surface(problem: &Problem, o: usize, lat: usize, lon: usize) -> Vec<[f64; 3]> {
     let s = &problem.obstacles[o];
-    // Every shape is star-shaped about its centre: along each ray, the
-    // boundary is where the inside test changes.
-    let inside = |x: [f64; 3]| -> bool {
-        match s.shape {
-            capp_core::Shape::SuperEllipsoid {
-                semi_axes,
-                exponents,
-            } => {
-                (0..3)
-                    .map(|a| (x[a] / semi_axes[a] as f64).abs().powf(exponents[a] as f64))
-                    .sum::<f64>()
-                    <= 1.0
-            }
-            shape => crate::geometry::signed_distance(&shape, x) <= 0.0,
-        }
-    };
-    let reach = half_box(&s.shape).iter().cloned().fold(0.0, f64::max) * 2.0;
     let r = rotation(s.euler_123.map(f64::from));
     let c = s.centre.map(f64::from);
+    let local = match s.shape {
+        capp_core::Shape::SuperEllipsoid {
+            semi_axes,
+            exponents,
+        } => ray_cast(semi_axes.map(f64::from), exponents.map(f64::from), lat, lon),
+        shape => primitive_surface(&shape, lat, lon),
+    };
+    local
+        .into_iter()
+        .map(|x| [0, 1, 2].map(|a| c[a] + r[a][0] * x[0] + r[a][1] * x[1] + r[a][2] * x[2]))
+        .collect()
+}
+
+/// A super-ellipsoid's surface in its frame: along each ray of a latitude
+/// and longitude grid, the largest `t` with `C(t d) <= 1`, by bisection.
+fn ray_cast(axes: [f64; 3], k: [f64; 3], lat: usize, lon: usize) -> Vec<[f64; 3]> {
     let mut out = Vec::with_capacity((lat + 1) * lon);
     for i in 0..=lat {
         let phi = std::f64::consts::PI * i as f64 / lat as f64;
         for j in 0..lon {
             let th = std::f64::consts::TAU * j as f64 / lon as f64;
             let d = [phi.sin() * th.cos(), phi.sin() * th.sin(), phi.cos()];
-            // Largest t with t d inside, by bisection.
-            let (mut lo, mut hi) = (0.0, reach);
+            // Largest t with C(t d) <= 1, by bisection (C grows with t).
+            let f = |t: f64| -> f64 { (0..3).map(|a| (t * d[a] / axes[a]).abs().powf(k[a])).sum() };
+            let (mut lo, mut hi) = (0.0, axes.iter().cloned().fold(0.0, f64::max) * 2.0);
             for _ in 0..40 {
                 let mid = 0.5 * (lo + hi);
-                if inside(d.map(|v| v * mid)) {
+                if f(mid) <= 1.0 {
                     lo = mid;
                 } else {
                     hi = mid;
                 }
             }
-            let x = d.map(|v| v * lo);
-            out.push([0, 1, 2].map(|a| c[a] + r[a][0] * x[0] + r[a][1] * x[1] + r[a][2] * x[2]));
+            out.push(d.map(|v| v * lo));
         }
     }
     out
+}
+
+/// A primitive's surface in its frame, as the same `lat + 1` rings of `lon`
+/// points: each ring is the cross-section outline (a circle, or for a box
+/// its rectangle, with a vertex on every corner when `lon` is a multiple of
+/// 4) scaled by `s` at height `z`. Ring 0 is the top's centre, ring 1 the
+/// top's edge, the side runs down to ring `lat - 1`, the bottom's edge, and
+/// ring `lat` is the bottom's centre; a capsule's ends are hemispheres.
+pub fn primitive_surface(shape: &capp_core::Shape, lat: usize, lon: usize) -> Vec<[f64; 3]> {
+    use capp_core::Shape as S;
+    use std::f64::consts::{FRAC_PI_2, PI, TAU};
+    let lat = lat.max(4);
+    let outline = |j: usize| -> [f64; 2] {
+        match *shape {
+            S::Cuboid { half_extents } => {
+                // Around the rectangle by arc length, corners at j = 0,
+                // lon/4, lon/2, 3 lon/4.
+                let [hx, hy] = [half_extents[0] as f64, half_extents[1] as f64];
+                let t = 4.0 * j as f64 / lon as f64;
+                let (side, f) = (t.floor() as usize % 4, t - t.floor());
+                let corners = [[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]];
+                let (p, q) = (corners[side], corners[(side + 1) % 4]);
+                [p[0] + (q[0] - p[0]) * f, p[1] + (q[1] - p[1]) * f]
+            }
+            _ => {
+                let th = TAU * j as f64 / lon as f64;
+                [th.cos(), th.sin()]
+            }
+        }
+    };
+    // (scale of the outline, height) per ring.
+    let rings: Vec<(f64, f64)> = match *shape {
+        S::Sphere { radius } => (0..=lat)
+            .map(|i| {
+                let phi = PI * i as f64 / lat as f64;
+                (radius as f64 * phi.sin(), radius as f64 * phi.cos())
+            })
+            .collect(),
+        S::Capsule { radius, length } => {
+            let (r, h) = (radius as f64, 0.5 * length as f64);
+            // The top hemisphere on the first rings, the side's middle on
+            // ring lat / 2, the bottom mirroring the top.
+            let half = lat / 2;
+            let ring = |i: usize| -> (f64, f64) {
+                if i < half {
+                    let phi = FRAC_PI_2 * i as f64 / (half - 1) as f64;
+                    (r * phi.sin(), h + r * phi.cos())
+                } else {
+                    (r, 0.0)
+                }
+            };
+            (0..=lat)
+                .map(|i| {
+                    if i <= half {
+                        ring(i)
+                    } else {
+                        let (s, z) = ring(lat - i);
+                        (s, -z)
+                    }
+                })
+                .collect()
+        }
+        S::Cuboid { half_extents } => flat_ended(1.0, half_extents[2] as f64, lat),
+        S::Cylinder { radius, length } => flat_ended(radius as f64, 0.5 * length as f64, lat),
+        S::SuperEllipsoid { .. } => Vec::new(),
+    };
+    rings
+        .iter()
+        .flat_map(|&(scale, z)| {
+            (0..lon).map(move |j| {
+                let [x, y] = outline(j);
+                [x * scale, y * scale, z]
+            })
+        })
+        .collect()
+}
+
+/// Rings of a flat-ended prism of outline scale `scale` and half height `h`:
+/// the top's centre, its edge, the side, the bottom's edge and centre.
+fn flat_ended(scale: f64, h: f64, lat: usize) -> Vec<(f64, f64)> {
+    (0..=lat)
+        .map(|i| match i {
+            0 => (0.0, h),
+            i if i == lat => (0.0, -h),
+            i => (scale, h - 2.0 * h * (i - 1) as f64 / (lat - 2) as f64),
+        })
+        .collect()
 }
 
 /// Half-extents of the box about the centre that holds `shape`, in its own

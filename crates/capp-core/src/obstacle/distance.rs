@@ -78,7 +78,9 @@ impl Primitive {
 }
 
 /// `(d, grad d)` of `shape` at the local point `x` (see the module docs).
-#[inline(never)]
+// Inlined: its one caller in the pair code then keeps `d` and `grad d` in
+// registers.
+#[inline(always)]
 pub fn signed_distance(shape: &Primitive, x: &Vec3) -> (f32, Vec3) {
     match *shape {
         Primitive::Sphere { radius } => from_core(x, radius),
@@ -101,6 +103,7 @@ pub fn signed_distance(shape: &Primitive, x: &Vec3) -> (f32, Vec3) {
 
 /// A ball of `radius` about the origin, the point `v` from its core:
 /// `|v| - radius` along `v / |v|` (`+z` at the centre itself).
+#[inline(always)]
 fn from_core(v: &Vec3, radius: f32) -> (f32, Vec3) {
     let r = sqrt(v.dot(v));
     if r > 0.0 {
@@ -119,6 +122,7 @@ fn sign(x: f32) -> f32 {
     }
 }
 
+#[inline(always)]
 fn cuboid(x: &Vec3, half: &Vec3) -> (f32, Vec3) {
     let q = x.abs() - half;
     let outside = q.map(|v| max(v, 0.0));
@@ -145,6 +149,7 @@ fn cuboid(x: &Vec3, half: &Vec3) -> (f32, Vec3) {
     (q[axis], n)
 }
 
+#[inline(always)]
 fn cylinder(x: &Vec3, radius: f32, half_length: f32) -> (f32, Vec3) {
     let rho = sqrt(x.x * x.x + x.y * x.y);
     let radial = if rho > 0.0 {

@@ -44,7 +44,7 @@
 //! is the distance itself, `d - m`. Points farther than the influence
 //! distance from the inflated surface are out of influence.
 
-use crate::math::{max, rotation_123, vec3, Mat3, Vec3};
+use crate::math::{max, min, rotation_123, vec3, Mat3, Vec3};
 
 pub mod distance;
 mod solid;
@@ -431,6 +431,17 @@ struct Inflated {
     inv_scale: f32,
 }
 
+/// `C - 1`, `grad C` and `d - m` of a ball of `radius` about the origin at
+/// the local point `v` (a sphere's, or a capsule's from its segment): with
+/// `rho = radius`, `C = (|v| / (m + radius))^2`.
+#[inline(always)]
+fn round(v: &Vec3, radius: f32, inflated: &Inflated) -> (f32, Vec3, f32) {
+    let inv_sq = inflated.inv_scale * inflated.inv_scale;
+    let length_sq = v.dot(v);
+    let gap = crate::math::sqrt(length_sq) - radius - inflated.margin;
+    (length_sq * inv_sq - 1.0, v * (2.0 * inv_sq), gap)
+}
+
 /// Half-extents of the smallest box about the centre, in the obstacle's own
 /// frame, that holds `s` (a super-ellipsoid's semi-axes), length units.
 fn half_box(s: &Solid) -> Vec3 {
@@ -537,7 +548,8 @@ impl Obstacle {
         let [rx, ry, rz] = s.euler_123;
         let rotation = rotation_123(rx, ry, rz);
         let axes = half_box(&s);
-        let aligned = s.euler_123 == [0.0; 3];
+        // A sphere is the same turned any way: its rotation is skipped.
+        let aligned = s.euler_123 == [0.0; 3] || matches!(s.shape, Shape::Sphere { .. });
         let inflated = margins.map(|m| {
             let inflated = axes.add_scalar(m);
             let reach = inflated.add_scalar(influence);
@@ -806,13 +818,53 @@ impl Obstacle {
     /// docs).
     #[inline(never)]
     fn primitive_pair(&self, primitive: &Primitive, inflated: &Inflated, x: &Vec3) -> Pair {
-        let (d, normal) = signed_distance(primitive, x);
-        let gap = d - inflated.margin;
-        // NaN (a point not finite) is out of influence too.
-        if gap > self.influence || gap.is_nan() {
+        let (clearance, local_gradient, gap) = match *primitive {
+            // Round about a point or a segment: `d + rho = |v|` (`rho` the
+            // radius), so `C = |v|^2 / (m + rho)^2` and `grad C = 2 v / (m +
+            // rho)^2`, no division; the root only for the distance.
+            Primitive::Sphere { radius } => round(x, radius, inflated),
+            Primitive::Capsule {
+                radius,
+                half_length,
+            } => {
+                let z = x.z - min(max(x.z, -half_length), half_length);
+                round(&Vec3::new(x.x, x.y, z), radius, inflated)
+            }
+            Primitive::Cuboid { half_extents } => {
+                // Outside: from the box's closest point, `o` the excess on
+                // each axis (signed as `x`); `grad C = 2 u inv o / d`, one
+                // division.
+                let o = Vec3::new(
+                    max(x.x.abs() - half_extents.x, 0.0).copysign(x.x),
+                    max(x.y.abs() - half_extents.y, 0.0).copysign(x.y),
+                    max(x.z.abs() - half_extents.z, 0.0).copysign(x.z),
+                );
+                let out_sq = o.dot(&o);
+                if out_sq > 0.0 {
+                    let d = crate::math::sqrt(out_sq);
+                    let u = (d + self.inradius) * inflated.inv_scale;
+                    (
+                        u * u - 1.0,
+                        o * (2.0 * u * inflated.inv_scale / d),
+                        d - inflated.margin,
+                    )
+                } else {
+                    let (d, normal) = signed_distance(primitive, x);
+                    let (clearance, gradient) = self.rebuilt(d, &normal, inflated);
+                    (clearance, gradient, d - inflated.margin)
+                }
+            }
+            _ => {
+                let (d, normal) = signed_distance(primitive, x);
+                let (clearance, gradient) = self.rebuilt(d, &normal, inflated);
+                (clearance, gradient, d - inflated.margin)
+            }
+        };
+        // One comparison: NaN (a point not finite) is out of influence too.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(gap <= self.influence) {
             return Pair::Far;
         }
-        let (clearance, local_gradient) = self.rebuilt(d, &normal, inflated);
         let gradient = if self.aligned {
             local_gradient
         } else {
@@ -826,7 +878,8 @@ impl Obstacle {
         }
         let distance = max(gap, 0.0);
         let distance_sq = distance * distance;
-        if clearance >= C_CUTOFF || clearance.is_nan() {
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(clearance < C_CUTOFF) {
             return Pair::Beyond { distance_sq };
         }
         Pair::Near {
