@@ -12,7 +12,7 @@
 use arbitrary::Arbitrary;
 use capp_core::control::LawKind;
 use capp_core::robot::{JointOrigin, Placement};
-use capp_core::{Joint, JointKind, Mission, Robot, Scenario, Settings, SuperEllipsoid, Waypoint};
+use capp_core::{Joint, JointKind, Mission, Robot, Scenario, Settings, Shape, Solid, Waypoint};
 use capp_fuzz::plan_a_few_steps;
 use libfuzzer_sys::fuzz_target;
 
@@ -93,6 +93,9 @@ struct FuzzObstacle {
     semi_axes: [Num; 3],
     exponents: [Num; 3],
     euler_123: [Num; 3],
+    /// The shape, modulo 5: a super-ellipsoid, then the CAD primitives
+    /// (their sizes from `semi_axes`).
+    shape: u8,
 }
 
 #[derive(Arbitrary, Debug)]
@@ -223,15 +226,35 @@ fuzz_target!(|input: Input| {
             Num::Tame(k) => min + (k as f32 / i16::MAX as f32 * 0.5 + 0.5) * (max - min),
         });
     }
-    let obstacles: Vec<SuperEllipsoid> = input
+    let obstacles: Vec<Solid> = input
         .obstacles
         .iter()
         .take(66)
-        .map(|o| SuperEllipsoid {
-            centre: o.centre.map(|x| x.get(40.0)),
-            semi_axes: o.semi_axes.map(|x| x.positive(5.0)),
-            exponents: o.exponents.map(|x| 1.0 + x.positive(11.0)),
-            euler_123: o.euler_123.map(|x| x.get(3.2)),
+        .map(|o| {
+            let sizes = o.semi_axes.map(|x| x.positive(5.0));
+            let shape = match o.shape % 5 {
+                0 => Shape::SuperEllipsoid {
+                    semi_axes: sizes,
+                    exponents: o.exponents.map(|x| 1.0 + x.positive(11.0)),
+                },
+                1 => Shape::Sphere { radius: sizes[0] },
+                2 => Shape::Cuboid {
+                    half_extents: sizes,
+                },
+                3 => Shape::Capsule {
+                    radius: sizes[0],
+                    length: sizes[1],
+                },
+                _ => Shape::Cylinder {
+                    radius: sizes[0],
+                    length: sizes[1],
+                },
+            };
+            Solid {
+                centre: o.centre.map(|x| x.get(40.0)),
+                euler_123: o.euler_123.map(|x| x.get(3.2)),
+                shape,
+            }
         })
         .collect();
     let waypoints: Vec<Waypoint> = input
