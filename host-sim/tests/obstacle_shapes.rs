@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use capp_core::math::vec3;
 use capp_core::obstacle::{Obstacle, PointKind};
-use capp_core::{Shape, Solid};
+use capp_core::Shape;
 use capp_sim::geometry::signed_distance;
 use capp_sim::Problem;
 
