@@ -73,6 +73,34 @@ fn pips_payload_bay_reaches_around_the_payload() {
     assert!(closest < 1.0, "closest approach C-1 = {closest}");
 }
 
+/// Motion time of a run: the sum of its steps' `h`, seconds.
+fn motion_time(result: &RunResult) -> f64 {
+    result.rows.iter().map(|r| r.h as f64).sum()
+}
+
+#[test]
+fn pips_payload_bay_cad_reaches_among_true_boxes_and_a_true_cylinder() {
+    use capp_core::Shape;
+    let (problem, _) = runs_and_checks("pips_payload_bay_cad.toml", Outcome::Reached);
+    // The same bay as `pips_payload_bay.toml`, from CAD primitives.
+    let shapes: Vec<Shape> = problem.obstacles.iter().map(|o| o.shape).collect();
+    assert!(matches!(shapes[0], Shape::Cuboid { .. }), "{shapes:?}");
+    assert!(matches!(shapes[1], Shape::Cylinder { .. }), "{shapes:?}");
+    assert!(matches!(shapes[2], Shape::Cuboid { .. }), "{shapes:?}");
+    let (bay, se) = plan("pips_payload_bay.toml");
+    assert_eq!(problem.start, bay.start);
+    assert_eq!(problem.joints.len(), bay.joints.len());
+    // The target: no more than 20 % slower than the
+    // super-ellipsoid bay.
+    let (_, cad) = plan("pips_payload_bay_cad.toml");
+    assert!(
+        motion_time(&cad) <= 1.2 * motion_time(&se),
+        "{} s against {} s",
+        motion_time(&cad),
+        motion_time(&se)
+    );
+}
+
 #[test]
 fn pips_dead_end_stalls() {
     runs_and_checks("pips_dead_end.toml", Outcome::Stalled);

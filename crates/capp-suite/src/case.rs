@@ -449,4 +449,6 @@ pub struct Case {
     pub start: Vec<f64>,
     /// Goal configuration: collision free, within limits; the target is its pose.
     pub goal: Vec<f64>,
+    /// The obstacles written into the file, in its order.
+    pub obstacles: Vec<Obstacle>,
 }

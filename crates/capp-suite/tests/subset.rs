@@ -17,7 +17,7 @@ use capp_suite::runner;
 use capp_suite::variants::{variants, with_settings};
 
 const SEED: u64 = 20_240_611;
-/// Cases per family in the subset (25 in all).
+/// Cases per family in the subset.
 const PER_FAMILY: usize = 5;
 /// Step cap of the subset's runs.
 const CAP: u32 = 2500;
@@ -588,4 +588,72 @@ fn the_csv_has_every_column_on_every_row_and_the_figures_draw() {
     assert!(text.contains("](docs/img/planning_reach.png)"));
     assert!(text.contains("](docs/img/planning_motion.png)"));
     assert!(text.contains("## Dead-end escapes"));
+}
+
+/// Whether two `f32` values agree to rounding.
+fn near(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 1e-6 * (1.0 + a.abs().max(b.abs()))
+}
+
+#[test]
+fn every_case_file_loads_back_to_the_obstacles_it_was_made_of() {
+    for c in subset() {
+        let problem = case::parse(&c.text, &c.name).unwrap();
+        assert_eq!(problem.obstacles.len(), c.obstacles.len(), "{}", c.name);
+        assert_eq!(
+            problem.obstacle_names.len(),
+            c.obstacles.len(),
+            "{}",
+            c.name
+        );
+        for ((solid, name), o) in problem
+            .obstacles
+            .iter()
+            .zip(&problem.obstacle_names)
+            .zip(&c.obstacles)
+        {
+            let what = format!("{} obstacle {name:?}", c.name);
+            assert_eq!(name, &o.name, "{what}");
+            assert_eq!(solid.shape, o.shape.core(), "{what}");
+            for k in 0..3 {
+                assert!(near(solid.centre[k], o.centre[k] as f32), "{what}");
+                assert!(near(solid.euler_123[k], o.euler[k] as f32), "{what}");
+            }
+        }
+    }
+}
+
+/// The CAD cell is made of primitives only, of every kind: boxes (some
+/// turned about z), vertical and horizontal cylinders, capsules, balls.
+#[test]
+fn cad_cells_are_primitives_of_every_kind() {
+    use capp_core::Shape;
+    let cases = families::cases(&family("cad_cell"), SEED, 20).unwrap();
+    let (mut turned_boxes, mut upright, mut lying, mut capsules, mut balls) = (0, 0, 0, 0, 0);
+    for c in &cases {
+        let problem = case::parse(&c.text, &c.name).unwrap();
+        assert!(c.obstacles.len() >= 7, "{}: table, shelf, pipe", c.name);
+        for solid in &problem.obstacles {
+            let [rx, ry, rz] = solid.euler_123;
+            match solid.shape {
+                Shape::SuperEllipsoid { .. } => panic!("{}: a super-ellipsoid", c.name),
+                Shape::Cuboid { .. } => {
+                    assert_eq!([rx, ry], [0.0, 0.0], "{}: boxes turn about z", c.name);
+                    turned_boxes += (rz != 0.0) as usize;
+                }
+                Shape::Cylinder { .. } if ry == 0.0 => upright += 1,
+                Shape::Cylinder { .. } => {
+                    assert!(near(ry, std::f32::consts::FRAC_PI_2), "{}", c.name);
+                    lying += 1;
+                }
+                Shape::Capsule { .. } => capsules += 1,
+                Shape::Sphere { .. } => balls += 1,
+            }
+        }
+    }
+    assert!(
+        turned_boxes > 0 && upright >= 20 && lying > 0 && capsules > 0 && balls > 0,
+        "{turned_boxes} turned boxes, {upright} upright and {lying} lying cylinders, \
+         {capsules} capsules, {balls} balls"
+    );
 }

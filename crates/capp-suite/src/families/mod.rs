@@ -10,6 +10,7 @@
 //! | [`ur5_table`] | Universal Robots UR5 from its URDF (metres), joints within +-pi | table, low shelf unit, boxes on the table and in the way | pose |
 //! | [`planar_posts`] | the planar 3-link arm (metres) | round posts | position |
 //! | [`snake_folds`] | a 12- to 24-joint snake (metres), its links kept apart | floor, pedestal, a ring of posts, boxes in the way | pose or position near its own base, behind it, inside the ring |
+//! | [`cad_cell`] | Franka Emika Panda from its URDF (metres), its links kept apart | CAD primitives only (true distances): table and shelf unit as true boxes, vertical and horizontal cylindrical pipes, boxes turned about z, capsules and balls on the table and in the way | pose |
 //!
 //! Every case is built the same way ([`scene`]): a scene, a start (home or a
 //! random configuration), a goal configuration, both within limits and clear
@@ -20,6 +21,7 @@
 //! finally the file is read back by the loader and the start must be accepted
 //! by `Planner::new`. Every draw has a bounded number of retries.
 
+pub mod cad_cell;
 pub mod iiwa_shelves;
 pub mod panda_shelves;
 pub mod pips_bay;
@@ -57,6 +59,7 @@ pub fn families() -> Vec<Family> {
         ur5_table::FAMILY,
         planar_posts::FAMILY,
         snake_folds::FAMILY,
+        cad_cell::FAMILY,
     ]
 }
 

@@ -341,6 +341,7 @@ impl Draft {
             text,
             start: start.to_vec(),
             goal: goal.to_vec(),
+            obstacles: self.spec.obstacles.clone(),
         })
     }
 }
