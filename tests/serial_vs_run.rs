@@ -107,6 +107,18 @@ fn the_papers_manoeuvre_planned_on_the_board_is_the_host_plan() {
     assert!(n > 20, "{n} setpoints");
 }
 
+/// The bay from CAD (issue 24): a true box floor and bulkhead and a
+/// cylindrical payload travel in protocol 10's `Obstacle.primitive`, and
+/// the board's plan round them is the host's to the bit.
+#[test]
+fn the_cad_bay_planned_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("pips_payload_bay_cad.toml", &elf);
+    assert!(n > 20, "{n} setpoints");
+}
+
 #[test]
 fn the_listings_input_dat_planned_on_the_board_is_the_host_plan() {
     let Some(elf) = capp_system_tests::firmware_or_skip() else {

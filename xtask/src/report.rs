@@ -484,6 +484,41 @@ pub fn tables(
     }
     let _ = writeln!(w);
 
+    let _ = writeln!(w, "### What each obstacle shape costs (M4F, per point / obstacle pair)");
+    let _ = writeln!(w);
+    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over 96 points round it within its influence (`step_count`'s `shape_costs`). Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x.");
+    let _ = writeln!(w);
+    let _ = writeln!(w, "| shape | aligned | turned | aligned / super-ellipsoid 8 | turned / super-ellipsoid 8 |");
+    let _ = writeln!(w, "|---|---|---|---|---|");
+    let shape = |label: &str, turn: &str| counts.get("shape", 0, 1, &format!("contact_{label}_{turn}"));
+    let (base_aligned, base_turned) = (
+        shape("superellipsoid8", "aligned"),
+        shape("superellipsoid8", "turned"),
+    );
+    for (label, name) in [
+        ("superellipsoid8", "super-ellipsoid, exponent 8"),
+        ("superellipsoid2", "super-ellipsoid, exponent 2"),
+        ("sphere", "sphere"),
+        ("box", "box"),
+        ("capsule", "capsule"),
+        ("cylinder", "cylinder"),
+    ] {
+        let (aligned, turned) = (shape(label, "aligned"), shape(label, "turned"));
+        let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
+            _ => "-".into(),
+        };
+        let _ = writeln!(
+            w,
+            "| {name} | {} | {} | {} | {} |",
+            opt(aligned, |x| format!("{x:.1}")),
+            opt(turned, |x| format!("{x:.1}")),
+            ratio(aligned, base_aligned),
+            ratio(turned, base_turned),
+        );
+    }
+    let _ = writeln!(w);
+
     let _ = writeln!(w, "### Scaling: chains of n joints, m obstacles");
     let _ = writeln!(w);
     let _ = writeln!(w, "M4F instructions per step (host in brackets: median over interleaved rounds, `crates/capp-bench/examples/host_scaling.rs`):");
