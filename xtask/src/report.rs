@@ -484,13 +484,20 @@ pub fn tables(
     }
     let _ = writeln!(w);
 
-    let _ = writeln!(w, "### What each obstacle shape costs (M4F, per point / obstacle pair)");
+    let _ = writeln!(
+        w,
+        "### What each obstacle shape costs (M4F, per point / obstacle pair)"
+    );
     let _ = writeln!(w);
     let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over 96 points round it within its influence (`step_count`'s `shape_costs`). Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x.");
     let _ = writeln!(w);
-    let _ = writeln!(w, "| shape | aligned | turned | aligned / super-ellipsoid 8 | turned / super-ellipsoid 8 |");
+    let _ = writeln!(
+        w,
+        "| shape | aligned | turned | aligned / super-ellipsoid 8 | turned / super-ellipsoid 8 |"
+    );
     let _ = writeln!(w, "|---|---|---|---|---|");
-    let shape = |label: &str, turn: &str| counts.get("shape", 0, 1, &format!("contact_{label}_{turn}"));
+    let shape =
+        |label: &str, turn: &str| counts.get("shape", 0, 1, &format!("contact_{label}_{turn}"));
     let (base_aligned, base_turned) = (
         shape("superellipsoid8", "aligned"),
         shape("superellipsoid8", "turned"),

@@ -7,7 +7,8 @@
 //! * every joint is within its limits;
 //! * no joint moved faster than its rate limit (`|dq| <= h max_rate`);
 //! * no avoidance point is inside an inflated obstacle (f64 super-ellipsoids
-//!   of `tests/common`; the planner decides in f32, so the check allows 16
+//!   and CAD primitives of `tests/common`, two thirds of the obstacles spheres,
+//!   boxes, capsules and cylinders measured on their true distance; the planner decides in f32, so the check allows 16
 //!   f32 ulps of the arm's reach of position rounding, and no more), at the
 //!   step's end and along the straight joint-space segment to it, checked
 //!   every [`DENSE_STEP`] of joint motion (conservative advancement);
@@ -103,6 +104,33 @@ struct ObstacleSpec {
     semi_axes: [f32; 3],
     exponents: [f32; 3],
     euler_123: [f32; 3],
+    /// 0, 1: a super-ellipsoid; 2-5: a sphere, box, capsule, cylinder (sizes
+    /// from `semi_axes`).
+    shape: u8,
+}
+
+impl ObstacleSpec {
+    fn shape(&self) -> Shape {
+        let [a, b, c] = self.semi_axes;
+        match self.shape {
+            2 => Shape::Sphere { radius: a },
+            3 => Shape::Cuboid {
+                half_extents: self.semi_axes,
+            },
+            4 => Shape::Capsule {
+                radius: a.min(b),
+                length: 2.0 * c,
+            },
+            5 => Shape::Cylinder {
+                radius: a,
+                length: 2.0 * b,
+            },
+            _ => Shape::SuperEllipsoid {
+                semi_axes: self.semi_axes,
+                exponents: self.exponents,
+            },
+        }
+    }
 }
 
 fn obstacle_spec() -> impl Strategy<Value = ObstacleSpec> {
@@ -114,15 +142,17 @@ fn obstacle_spec() -> impl Strategy<Value = ObstacleSpec> {
         [0.1f32..3.0, 0.1f32..3.0, 0.1f32..3.0],
         [exponent.clone(), exponent.clone(), exponent],
         [-3.2f32..3.2, -3.2f32..3.2, -3.2f32..3.2],
+        0u8..6,
     )
         .prop_map(
-            |(link, along, offset, semi_axes, exponents, euler_123)| ObstacleSpec {
+            |(link, along, offset, semi_axes, exponents, euler_123, shape)| ObstacleSpec {
                 link,
                 along,
                 offset,
                 semi_axes,
                 exponents,
                 euler_123,
+                shape,
             },
         )
 }
@@ -350,7 +380,7 @@ fn build(joints: &[Joint], case: &Case) -> (Sc, Vec<f32>) {
     let start = config_at(joints, &case.start);
     let goal = config_at(joints, &case.goal);
     let (start_chain, goal_chain) = (fk64(joints, &to64(&start)), fk64(joints, &to64(&goal)));
-    let mut obstacles: Vec<SuperEllipsoid> = case
+    let mut obstacles: Vec<Solid> = case
         .obstacles
         .iter()
         .map(|o| {
@@ -360,11 +390,10 @@ fn build(joints: &[Joint], case: &Case) -> (Sc, Vec<f32>) {
                 add(a, scale(sub(b, a), o.along as f64)),
                 o.offset.map(|x| x as f64),
             );
-            SuperEllipsoid {
+            Solid {
                 centre: centre.map(|x| x as f32),
-                semi_axes: o.semi_axes,
-                exponents: o.exponents,
                 euler_123: o.euler_123,
+                shape: o.shape(),
             }
         })
         .collect();
@@ -402,11 +431,7 @@ fn check_run(sc: &Sc, start: &[f32]) -> Result<Outcome, TestCaseError> {
         s.avoidance.link_margin as f64,
     );
     let interior = s.avoidance.points_per_link as usize;
-    let obstacles: Vec<SuperEllipsoid> = sc
-        .obstacles()
-        .iter()
-        .map(|o| o.source().super_ellipsoid().expect("a super-ellipsoid"))
-        .collect();
+    let obstacles: Vec<Solid> = sc.obstacles().iter().map(|o| *o.source()).collect();
     // The planner decides in f32; exact (f64) arithmetic may put a point that
     // f32 saw a hair outside a hair inside. The check allows the f32 rounding
     // of the positions and nothing more: it evaluates obstacles inflated by the
@@ -417,7 +442,8 @@ fn check_run(sc: &Sc, start: &[f32]) -> Result<Outcome, TestCaseError> {
         .sum();
     let slack = ROUNDING * reach;
     let shrunk = (margins.0 - slack, margins.1 - slack);
-    let clearance = |q: &[f32]| min_clearance64(&joints, &to64(q), &obstacles, shrunk, interior);
+    let clearance =
+        |q: &[f32]| min_clearance_solids64(&joints, &to64(q), &obstacles, shrunk, interior);
 
     let mut planner = Planner::new(sc, start).expect("build() checked the start");
     if !obstacles.is_empty() {

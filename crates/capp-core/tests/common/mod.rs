@@ -152,6 +152,73 @@ pub fn c64(s: &SuperEllipsoid, margin: f64, p: V3) -> f64 {
         .sum()
 }
 
+/// `C(p)` in f64 of any obstacle inflated by `margin`: eq. 25 for a
+/// super-ellipsoid ([`c64`]); for a CAD primitive `((d + rho) / (margin +
+/// rho))^2`, `d` its signed distance (from the closest point of the shape,
+/// computed here by clamping, apart from the core's closed forms) and `rho`
+/// its inradius.
+pub fn solid_c64(s: &capp_core::Solid, margin: f64, p: V3) -> f64 {
+    use capp_core::Shape as S;
+    if let Some(se) = s.super_ellipsoid() {
+        return c64(&se, margin, p);
+    }
+    let r = euler123(
+        s.euler_123[0] as f64,
+        s.euler_123[1] as f64,
+        s.euler_123[2] as f64,
+    );
+    let x = mat_vec(&transpose(&r), sub(p, s.centre.map(|x| x as f64)));
+    let len = |v: V3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let (d, rho) = match s.shape {
+        S::Sphere { radius } => (len(x) - radius as f64, radius as f64),
+        S::Capsule { radius, length } => {
+            let l = length as f64 / 2.0;
+            let axis = [0.0, 0.0, x[2].clamp(-l, l)];
+            (len(sub(x, axis)) - radius as f64, radius as f64)
+        }
+        S::Cuboid { half_extents } => {
+            let h = half_extents.map(|v| v as f64);
+            let closest = [0, 1, 2].map(|i| x[i].clamp(-h[i], h[i]));
+            let out = len(sub(x, closest));
+            let depth = (0..3).map(|i| x[i].abs() - h[i]).fold(f64::MIN, f64::max);
+            (
+                if out > 0.0 { out } else { depth },
+                h[0].min(h[1]).min(h[2]),
+            )
+        }
+        S::Cylinder { radius, length } => {
+            let (r, l) = (radius as f64, length as f64 / 2.0);
+            let rho = x[0].hypot(x[1]);
+            // The closest point of the solid, in the (radial, axial) plane.
+            let (cr, cz) = (rho.min(r), x[2].clamp(-l, l));
+            let out = (rho - cr).hypot(x[2] - cz);
+            let depth = (rho - r).max(x[2].abs() - l);
+            (if out > 0.0 { out } else { depth }, r.min(l))
+        }
+        S::SuperEllipsoid { .. } => unreachable!("handled above"),
+    };
+    ((d + rho) / (margin + rho)).powi(2)
+}
+
+/// [`min_clearance64`] for obstacles of any shape ([`solid_c64`]).
+pub fn min_clearance_solids64(
+    joints: &[Joint],
+    q: &[f64],
+    obstacles: &[capp_core::Solid],
+    margins: (f64, f64),
+    interior: usize,
+) -> f64 {
+    let chain = fk64(joints, q);
+    let mut m = f64::INFINITY;
+    for (point, is_joint) in points64(&chain, interior) {
+        let margin = if is_joint { margins.0 } else { margins.1 };
+        for s in obstacles {
+            m = m.min(solid_c64(s, margin, point) - 1.0);
+        }
+    }
+    m
+}
+
 /// Avoidance points as the paper places them: per link, `interior` evenly
 /// spaced points (link margin) and the far joint origin (joint margin).
 pub fn points64(chain: &Chain64, interior: usize) -> Vec<(V3, bool)> {
