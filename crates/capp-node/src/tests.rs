@@ -861,3 +861,57 @@ fn a_start_in_self_collision_is_refused() {
     let got = outcomes(&exchange(&mut node, &mut uart));
     assert_eq!(got.last(), Some(&(8, ErrorCode::Framing, 0xAA)));
 }
+
+#[test]
+fn a_bad_primitive_is_refused_with_its_index() {
+    // Protocol 10's primitives: a sphere of radius 0 is stored as sent and
+    // refused at `Run` by the core's validation, naming the obstacle; a
+    // good box in its place plans.
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    load(&mut uart);
+    uart.send(&Command::Clear(Part::Obstacles));
+    let solid = |centre: [f32; 3], shape| -> capp_proto::Obstacle {
+        capp_core::Solid::aligned(centre, shape).into()
+    };
+    uart.send(&Command::Obstacle {
+        index: 0,
+        obstacle: solid(
+            [500.0; 3],
+            capp_core::Shape::Cuboid {
+                half_extents: [1.0, 2.0, 3.0],
+            },
+        ),
+    });
+    uart.send(&Command::Obstacle {
+        index: 1,
+        obstacle: solid([400.0; 3], capp_core::Shape::Sphere { radius: 0.0 }),
+    });
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(
+        got.last(),
+        Some(&Reply::Error {
+            command: 8,
+            code: ErrorCode::InvalidObstacle,
+            index: 1,
+        })
+    );
+    assert_ne!(node.status().state, State::Running);
+    // The same with the sphere's radius fixed.
+    uart.send(&Command::Clear(Part::Obstacles));
+    uart.send(&Command::Obstacle {
+        index: 0,
+        obstacle: solid([400.0; 3], capp_core::Shape::Sphere { radius: 2.0 }),
+    });
+    uart.send(&Command::Run {
+        every: 1,
+        error_change: None,
+    });
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(got.last(), Some(&Reply::Ack { command: 8 }));
+    assert_eq!(node.status().state, State::Running);
+}
