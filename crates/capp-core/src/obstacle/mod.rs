@@ -834,10 +834,11 @@ impl Obstacle {
                 // Outside: from the box's closest point, `o` the excess on
                 // each axis (signed as `x`); `grad C = 2 u inv o / d`, one
                 // division.
+                let outside = |x: f32, h: f32| x - min(max(x, -h), h);
                 let o = Vec3::new(
-                    max(x.x.abs() - half_extents.x, 0.0).copysign(x.x),
-                    max(x.y.abs() - half_extents.y, 0.0).copysign(x.y),
-                    max(x.z.abs() - half_extents.z, 0.0).copysign(x.z),
+                    outside(x.x, half_extents.x),
+                    outside(x.y, half_extents.y),
+                    outside(x.z, half_extents.z),
                 );
                 let out_sq = o.dot(&o);
                 if out_sq > 0.0 {
