@@ -277,7 +277,10 @@ fn the_arm_png_draws_the_payload_where_it_projects() {
         .unwrap();
     let (c, a) = (
         problem.obstacles[o].centre.map(f64::from),
-        views::half_box(&problem.obstacles[o].shape),
+        match problem.obstacles[o].shape {
+            capp_core::Shape::SuperEllipsoid { semi_axes, .. } => semi_axes.map(f64::from),
+            other => panic!("the bay's payload is a super-ellipsoid, not {other:?}"),
+        },
     );
     // (2/3)^8 + (5/9)^2 < 1: inside the payload (exponents 8, 2, 2).
     let inside = [c[0] + a[0] * 2.0 / 3.0, c[1], c[2] + a[2] * 5.0 / 9.0];

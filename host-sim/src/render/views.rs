@@ -215,20 +215,6 @@ fn flat_ended(scale: f64, h: f64, lat: usize) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Half-extents of the box about the centre that holds `shape`, in its own
-/// frame.
-pub fn half_box(shape: &capp_core::Shape) -> [f64; 3] {
-    use capp_core::Shape as S;
-    let [x, y, z] = match *shape {
-        S::SuperEllipsoid { semi_axes, .. } => semi_axes,
-        S::Sphere { radius } => [radius; 3],
-        S::Cuboid { half_extents } => half_extents,
-        S::Capsule { radius, length } => [radius, radius, 0.5 * length + radius],
-        S::Cylinder { radius, length } => [radius, radius, 0.5 * length],
-    };
-    [x, y, z].map(f64::from)
-}
-
 /// Convex hull (monotone chain), counter-clockwise in a y-up frame.
 fn hull(mut pts: Vec<P2>) -> Vec<P2> {
     pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));

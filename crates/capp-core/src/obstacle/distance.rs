@@ -13,7 +13,8 @@
 //! Closed forms, a few dozen flops each, no iteration: the pair code runs
 //! them for every avoidance point within an obstacle's influence.
 
-use crate::math::{max, min, sqrt, Vec3};
+use super::Shape;
+use crate::math::{max, min, sqrt, vec3, Vec3};
 
 /// A primitive in its own frame: sizes in length units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,6 +47,26 @@ pub enum Primitive {
 }
 
 impl Primitive {
+    /// The primitive a user's shape is, in this module's terms (half
+    /// lengths); `None` for a super-ellipsoid (not measured on distance).
+    pub fn of(shape: &Shape) -> Option<Primitive> {
+        match *shape {
+            Shape::SuperEllipsoid { .. } => None,
+            Shape::Sphere { radius } => Some(Primitive::Sphere { radius }),
+            Shape::Cuboid { half_extents } => Some(Primitive::Cuboid {
+                half_extents: vec3(half_extents),
+            }),
+            Shape::Capsule { radius, length } => Some(Primitive::Capsule {
+                radius,
+                half_length: 0.5 * length,
+            }),
+            Shape::Cylinder { radius, length } => Some(Primitive::Cylinder {
+                radius,
+                half_length: 0.5 * length,
+            }),
+        }
+    }
+
     /// Half-extents of the smallest box about the origin that holds the
     /// shape, length units.
     pub fn half_box(&self) -> Vec3 {
@@ -176,7 +197,6 @@ fn cylinder(x: &Vec3, radius: f32, half_length: f32) -> (f32, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::vec3;
 
     fn shapes() -> [Primitive; 4] {
         [

@@ -316,6 +316,8 @@ enum Powers {
     CylinderZ,
     /// Anything else: each axis by its own [`Exponent`].
     Axes,
+    /// Not a super-ellipsoid: a primitive, measured on distance.
+    Primitive,
 }
 
 impl Powers {
@@ -447,10 +449,7 @@ fn round(v: &Vec3, radius: f32, inflated: &Inflated) -> (f32, Vec3, f32) {
 fn half_box(s: &Solid) -> Vec3 {
     match s.shape {
         Shape::SuperEllipsoid { semi_axes, .. } => vec3(semi_axes),
-        Shape::Sphere { radius } => Vec3::repeat(radius),
-        Shape::Cuboid { half_extents } => vec3(half_extents),
-        Shape::Capsule { radius, length } => Vec3::new(radius, radius, 0.5 * length + radius),
-        Shape::Cylinder { radius, length } => Vec3::new(radius, radius, 0.5 * length),
+        ref shape => Primitive::of(shape).map_or(Vec3::zeros(), |p| p.half_box()),
     }
 }
 
@@ -529,21 +528,7 @@ impl Obstacle {
         if !exponents.iter().all(|&k| (1.0..=MAX_EXPONENT).contains(&k)) {
             return Err(ObstacleError::ExponentOutOfRange { obstacle });
         }
-        let primitive = match s.shape {
-            Shape::SuperEllipsoid { .. } => None,
-            Shape::Sphere { radius } => Some(Primitive::Sphere { radius }),
-            Shape::Cuboid { half_extents } => Some(Primitive::Cuboid {
-                half_extents: vec3(half_extents),
-            }),
-            Shape::Capsule { radius, length } => Some(Primitive::Capsule {
-                radius,
-                half_length: 0.5 * length,
-            }),
-            Shape::Cylinder { radius, length } => Some(Primitive::Cylinder {
-                radius,
-                half_length: 0.5 * length,
-            }),
-        };
+        let primitive = Primitive::of(&s.shape);
         let inradius = primitive.map_or(0.0, |p| p.inradius());
         let [rx, ry, rz] = s.euler_123;
         let rotation = rotation_123(rx, ry, rz);
@@ -572,7 +557,11 @@ impl Obstacle {
             centre: vec3(s.centre.map(|c| if c == 0.0 { -0.0 } else { c })),
             inflated,
             aligned,
-            powers: Powers::new(exponents),
+            powers: if primitive.is_some() {
+                Powers::Primitive
+            } else {
+                Powers::new(exponents)
+            },
             exponents: exponents.map(Exponent::new),
             rotation,
             primitive,
@@ -712,14 +701,18 @@ impl Obstacle {
             }
             x
         };
-        if let Some(primitive) = &self.primitive {
-            return self.primitive_pair(primitive, inflated, &x);
-        }
         let (ax, ay, az) = (x.x.abs(), x.y.abs(), x.z.abs());
         let inv = &inflated.inv;
         // Per axis the term `|x/a|^k` and the gradient's component
-        // `k |x/a|^(k-1) sign(x) / a`.
+        // `k |x/a|^(k-1) sign(x) / a`. A primitive is one more case of the
+        // same dispatch, so a super-ellipsoid's pair pays no test for it.
         let ((tx, gx), (ty, gy), (tz, gz)) = match self.powers {
+            Powers::Primitive => {
+                return match &self.primitive {
+                    Some(primitive) => self.primitive_pair(primitive, inflated, &x),
+                    None => Pair::Far,
+                }
+            }
             Powers::Same2 => (
                 even_term_and_gradient::<2>(x.x, inv.x),
                 even_term_and_gradient::<2>(x.y, inv.y),
@@ -816,6 +809,10 @@ impl Obstacle {
     /// [`Obstacle::pair`] for a primitive, the local point `x` within its
     /// influence box: `C` rebuilt on the signed distance (see the module
     /// docs).
+    // Out of line and cold: the super-ellipsoid pair code it is called from
+    // keeps its registers (inlined, it made every super-ellipsoid pair 11
+    // instructions slower; `cold` saves 110 a PIPS + 8 step).
+    #[cold]
     #[inline(never)]
     fn primitive_pair(&self, primitive: &Primitive, inflated: &Inflated, x: &Vec3) -> Pair {
         let (clearance, local_gradient, gap) = match *primitive {
