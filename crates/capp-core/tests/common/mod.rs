@@ -261,15 +261,8 @@ pub fn min_clearance64(
     margins: (f64, f64),
     interior: usize,
 ) -> f64 {
-    let chain = fk64(joints, q);
-    let mut m = f64::INFINITY;
-    for (point, is_joint) in points64(&chain, interior) {
-        let margin = if is_joint { margins.0 } else { margins.1 };
-        for s in obstacles {
-            m = m.min(c64(s, margin, point) - 1.0);
-        }
-    }
-    m
+    let solids: Vec<capp_core::Solid> = obstacles.iter().map(|&s| s.into()).collect();
+    min_clearance_solids64(joints, q, &solids, margins, interior)
 }
 
 /// A random chain of `n` joints, both kinds, lengths of a few units.
