@@ -41,8 +41,11 @@
 //! potential (eq. 26), the projection and the engage threshold treat a
 //! primitive as they treat the exponent-2 super-ellipsoid of its size. The
 //! gradient is `2 (d + rho) / (m + rho)^2 grad d`, exact; the distance bound
-//! is the distance itself, `d - m`. Points farther than the influence
-//! distance from the inflated surface are out of influence.
+//! is the distance itself, `d - m`, except for a sphere, whose pair runs
+//! without a square root and takes the super-ellipsoid's convex bound
+//! `(C - 1) / |grad C|` (at least half the distance, equal on the inflated
+//! surface). Points farther than the influence distance from the inflated
+//! surface are out of influence.
 
 use crate::math::{max, min, rotation_123, vec3, Mat3, Vec3};
 
@@ -434,8 +437,8 @@ struct Inflated {
 }
 
 /// `C - 1`, `grad C` and `d - m` of a ball of `radius` about the origin at
-/// the local point `v` (a sphere's, or a capsule's from its segment): with
-/// `rho = radius`, `C = (|v| / (m + radius))^2`.
+/// the local point `v` (a capsule's, `v` from its segment): with `rho =
+/// radius`, `C = (|v| / (m + radius))^2`.
 #[inline(always)]
 fn round(v: &Vec3, radius: f32, inflated: &Inflated) -> (f32, Vec3, f32) {
     let inv_sq = inflated.inv_scale * inflated.inv_scale;
@@ -557,10 +560,9 @@ impl Obstacle {
             centre: vec3(s.centre.map(|c| if c == 0.0 { -0.0 } else { c })),
             inflated,
             aligned,
-            powers: if primitive.is_some() {
-                Powers::Primitive
-            } else {
-                Powers::new(exponents)
+            powers: match primitive {
+                Some(_) => Powers::Primitive,
+                None => Powers::new(exponents),
             },
             exponents: exponents.map(Exponent::new),
             rotation,
@@ -816,10 +818,10 @@ impl Obstacle {
     #[inline(never)]
     fn primitive_pair(&self, primitive: &Primitive, inflated: &Inflated, x: &Vec3) -> Pair {
         let (clearance, local_gradient, gap) = match *primitive {
-            // Round about a point or a segment: `d + rho = |v|` (`rho` the
-            // radius), so `C = |v|^2 / (m + rho)^2` and `grad C = 2 v / (m +
-            // rho)^2`, no division; the root only for the distance.
-            Primitive::Sphere { radius } => round(x, radius, inflated),
+            Primitive::Sphere { .. } => return self.sphere_pair(x, inflated),
+            // Round about a segment: `d + rho = |v|` (`rho` the radius), so
+            // `C = |v|^2 / (m + rho)^2` and `grad C = 2 v / (m + rho)^2`, no
+            // division; the root only for the distance.
             Primitive::Capsule {
                 radius,
                 half_length,
@@ -858,6 +860,49 @@ impl Obstacle {
                 (clearance, gradient, d - inflated.margin)
             }
         };
+        self.primitive_tail(clearance, local_gradient, gap)
+    }
+
+    /// [`Obstacle::pair`] for a sphere, inline and without a root or a
+    /// call (`rho` is the radius `r`, so `C = |x|^2 / (m + r)^2`, exactly
+    /// the ellipsoid's): the influence test on `|x|^2`, and for the
+    /// distance the convex bound `(C - 1)^2 / |grad C|^2` a super-ellipsoid
+    /// uses, which is below the true distance `|x| - r - m` by the factor
+    /// `(|x| + r + m) / (2 |x|)` (1 on the inflated surface, at least 1/2).
+    #[inline(always)]
+    fn sphere_pair(&self, x: &Vec3, inflated: &Inflated) -> Pair {
+        let length_sq = x.dot(x);
+        let outer = self.inradius + inflated.margin + self.influence;
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(length_sq <= outer * outer) {
+            return Pair::Far;
+        }
+        let inv_sq = inflated.inv_scale * inflated.inv_scale;
+        let clearance = length_sq * inv_sq - 1.0;
+        let gradient = x * (2.0 * inv_sq);
+        if clearance <= 0.0 {
+            return Pair::Inside {
+                clearance,
+                gradient,
+            };
+        }
+        let slope_sq = 4.0 * inv_sq * inv_sq * length_sq;
+        let distance_sq = clearance * clearance / slope_sq;
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(clearance < C_CUTOFF) {
+            return Pair::Beyond { distance_sq };
+        }
+        Pair::Near {
+            clearance,
+            gradient,
+            distance_sq,
+        }
+    }
+
+    /// The cases of [`Pair`] from a primitive's `C - 1`, `grad C` (local
+    /// frame) and `d - m`.
+    #[inline(always)]
+    fn primitive_tail(&self, clearance: f32, local_gradient: Vec3, gap: f32) -> Pair {
         // One comparison: NaN (a point not finite) is out of influence too.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         if !(gap <= self.influence) {
@@ -1293,7 +1338,7 @@ mod tests {
     fn margins_of_primitives_are_true_distances() {
         // Clearance is 0 exactly where the distance to the surface is the
         // point kind's margin, and `distance_sq` is the distance to that
-        // inflated surface.
+        // inflated surface (for a sphere a lower bound on it).
         let mut rng = 17u64;
         let margins = [0.6, 0.3];
         for solid in primitives() {
@@ -1311,7 +1356,15 @@ mod tests {
                     };
                     assert_eq!(c.clearance <= 0.0, d <= m, "{solid:?} {p:?} {d} {c:?}");
                     let expected = (d - m).max(0.0);
-                    assert!((c.distance_sq.sqrt() - expected).abs() < 1e-5);
+                    let bound = c.distance_sq.sqrt();
+                    if matches!(shape, Primitive::Sphere { .. }) {
+                        // The convex bound: never above the distance, at
+                        // least half of it.
+                        assert!(bound <= expected + 1e-5, "{bound} > {expected}");
+                        assert!(bound >= 0.5 * expected - 1e-5, "{bound} << {expected}");
+                    } else {
+                        assert!((bound - expected).abs() < 1e-5, "{bound} != {expected}");
+                    }
                     let uncut = o.clearance_uncut(&p, kind);
                     assert!((uncut - c.clearance).abs() <= 1e-6 * (1.0 + uncut.abs()));
                 }
