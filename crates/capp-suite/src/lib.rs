@@ -9,7 +9,7 @@
 //! |---|---|
 //! | [`rng`] | the seeded generator (splitmix64) |
 //! | [`case`] | the case and its scenario file (TOML writer) |
-//! | [`families`] | the seven families and the scene building they share |
+//! | [`families`] | the eight families and the scene building they share |
 //! | [`oracle`] | RRT-Connect with dense independent collision checks, shortcuts |
 //! | [`variants`] | the planner variants compared side by side |
 //! | [`metrics`] | what one run is measured by (safety from the independent checker) |
