@@ -6,29 +6,7 @@ use std::process::Command;
 
 use capp_sim::Problem;
 
-const PLANAR_HEAD: &str = r#"name = "bad"
-[units]
-angle = "degrees"
-length = "metres"
-
-[[robot.joints]]
-type = "revolute"
-alpha = 0.0
-a = 0.5
-theta = 0.0
-min = -170.0
-max = 170.0
-max_rate = 30.0
-
-[[robot.joints]]
-type = "revolute"
-alpha = 0.0
-a = 0.4
-theta = 0.0
-min = -150.0
-max = 150.0
-max_rate = 30.0
-"#;
+mod common;
 
 const PLANAR_TAIL: &str = r#"
 [target]
@@ -62,7 +40,7 @@ fn rejects(name: &str, text: &str, line: usize, needle: &str) {
 }
 
 fn planar(middle: &str, tail: &str) -> String {
-    format!("{PLANAR_HEAD}{middle}{tail}")
+    format!("name = \"bad\"\n{}{middle}{tail}", common::PLANAR_ARM)
 }
 
 #[test]

@@ -12,32 +12,15 @@ use capp_core::Shape;
 use capp_sim::geometry::signed_distance;
 use capp_sim::Problem;
 
-const HEAD: &str = r#"name = "shapes"
-[units]
-angle = "degrees"
-length = "metres"
+mod common;
 
-[[robot.joints]]
-type = "revolute"
-alpha = 0.0
-a = 0.5
-theta = 0.0
-min = -170.0
-max = 170.0
-max_rate = 30.0
-
-[[robot.joints]]
-type = "revolute"
-alpha = 0.0
-a = 0.4
-theta = 0.0
-min = -150.0
-max = 150.0
-max_rate = 30.0
-
-[target]
-position = [0.4, 0.7, 0.0]
-"#;
+/// The planar arm with a target, before the obstacles.
+fn head() -> String {
+    format!(
+        "name = \"shapes\"\n{}\n[target]\nposition = [0.4, 0.7, 0.0]\n",
+        common::PLANAR_ARM
+    )
+}
 
 fn write(dir: &tempfile::TempDir, text: &str) -> PathBuf {
     let p = dir.path().join("s.toml");
@@ -47,7 +30,7 @@ fn write(dir: &tempfile::TempDir, text: &str) -> PathBuf {
 
 fn load(obstacles: &str) -> Result<Problem, String> {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(&dir, &format!("{HEAD}{obstacles}"));
+    let path = write(&dir, &format!("{}{obstacles}", head()));
     Problem::load(&path).map_err(|e| {
         let msg = e.to_string();
         let prefix = format!("{}:", path.display());
@@ -223,7 +206,7 @@ fn bad_shapes_get_one_line_errors_at_their_line() {
         let msg = load(&one(keys)).expect_err(keys);
         // The obstacle's table starts on the line after the head; an
         // unknown key is reported at its own line.
-        let table = HEAD.lines().count() + 2;
+        let table = head().lines().count() + 2;
         let line = if needle.starts_with("unknown field") {
             table + keys.lines().count() + 1
         } else {

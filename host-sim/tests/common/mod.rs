@@ -22,6 +22,32 @@ use capp_sim::{plan, trajectory, Problem};
 /// end is beyond the reach). A low wall (half-height 5) is small enough to
 /// be detoured round; a tall one (20: its inflated box more than half the
 /// reach) is not, and is escaped by a walk.
+/// Two revolute joints in a plane, metres and degrees (links of 0.5 and
+/// 0.4 m), as scenario text: the `[units]` and the `[[robot.joints]]`,
+/// starting on a line of its own.
+pub const PLANAR_ARM: &str = r#"[units]
+angle = "degrees"
+length = "metres"
+
+[[robot.joints]]
+type = "revolute"
+alpha = 0.0
+a = 0.5
+theta = 0.0
+min = -170.0
+max = 170.0
+max_rate = 30.0
+
+[[robot.joints]]
+type = "revolute"
+alpha = 0.0
+a = 0.4
+theta = 0.0
+min = -150.0
+max = 150.0
+max_rate = 30.0
+"#;
+
 const START: [f64; 3] = [0.4, -0.3, -0.3];
 const WALL_CENTRE_X: f64 = 30.0;
 const WALL_HALF_LENGTH: f64 = 7.0;

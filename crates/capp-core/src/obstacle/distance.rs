@@ -108,18 +108,38 @@ pub fn signed_distance(shape: &Primitive, x: &Vec3) -> (f32, Vec3) {
         Primitive::Capsule {
             radius,
             half_length,
-        } => {
-            // From the nearest point of the segment (`max`/`min`, not
-            // `clamp`: that has a panic path).
-            let z = x.z - min(max(x.z, -half_length), half_length);
-            from_core(&Vec3::new(x.x, x.y, z), radius)
-        }
+        } => from_core(&from_segment(x, half_length), radius),
         Primitive::Cuboid { half_extents } => cuboid(x, &half_extents),
         Primitive::Cylinder {
             radius,
             half_length,
         } => cylinder(x, radius, half_length),
     }
+}
+
+/// `x` less its nearest point of the segment from `z = -half_length` to
+/// `z = +half_length` (a capsule's core).
+#[inline(always)]
+pub fn from_segment(x: &Vec3, half_length: f32) -> Vec3 {
+    Vec3::new(x.x, x.y, x.z - clamp(x.z, half_length))
+}
+
+/// `x` less its nearest point of the box `|x_i| <= half_i`: zero inside,
+/// each component the excess beyond a face, signed as `x`.
+#[inline(always)]
+pub fn from_box(x: &Vec3, half: &Vec3) -> Vec3 {
+    Vec3::new(
+        x.x - clamp(x.x, half.x),
+        x.y - clamp(x.y, half.y),
+        x.z - clamp(x.z, half.z),
+    )
+}
+
+/// `v` clamped to `[-h, h]` (`max` and `min`, not `f32::clamp`: that has a
+/// panic path).
+#[inline(always)]
+fn clamp(v: f32, h: f32) -> f32 {
+    min(max(v, -h), h)
 }
 
 /// A ball of `radius` about the origin, the point `v` from its core:
@@ -145,19 +165,14 @@ fn sign(x: f32) -> f32 {
 
 #[inline(always)]
 fn cuboid(x: &Vec3, half: &Vec3) -> (f32, Vec3) {
-    let q = x.abs() - half;
-    let outside = q.map(|v| max(v, 0.0));
+    let outside = from_box(x, half);
     let out_sq = outside.dot(&outside);
     if out_sq > 0.0 {
         let d = sqrt(out_sq);
-        let n = Vec3::new(
-            outside.x * sign(x.x),
-            outside.y * sign(x.y),
-            outside.z * sign(x.z),
-        ) / d;
-        return (d, n);
+        return (d, outside / d);
     }
     // Inside (or on the surface): the nearest face is the least deep.
+    let q = x.abs() - half;
     let axis = if q.x >= q.y && q.x >= q.z {
         0
     } else if q.y >= q.z {
