@@ -85,7 +85,7 @@ fn translation(t: &Mat4) -> Vec3 {
 /// measured as the core measures it.
 fn cost(obstacle: &Obstacle, p: &Vec3, kind: PointKind, margins: [f32; 2]) -> f32 {
     let Some(s) = obstacle.source().super_ellipsoid() else {
-        return obstacle.clearance_uncut(p, kind);
+        return obstacle.clearance_uncut(p, kind, &[]);
     };
     let margin = margins[kind as usize];
     let x = obstacle.rotation().transpose() * (p - obstacle.centre());

@@ -163,7 +163,7 @@ impl<const N: usize> PhaseBench<N> {
         self.field = potential_gradient(
             scenario.robot(),
             &self.frames,
-            scenario.obstacles(),
+            scenario.world(),
             &scenario.settings().avoidance,
             &mut self.mu,
             &mut self.distance_sq,

@@ -157,7 +157,7 @@ fn clear_of<const N: usize>(
     let Ok(o) = Obstacle::new(0, s, avoidance.margins(), avoidance.influence_distance) else {
         return false;
     };
-    let ok = |p: &Vec3, kind| o.clearance_uncut(p, kind) >= MIN_START_CLEARANCE;
+    let ok = |p: &Vec3, kind| o.clearance_uncut(p, kind, &[]) >= MIN_START_CLEARANCE;
     points(frames, avoidance).all(|point| ok(&point.position, point.kind))
         && ok(target, capp_core::obstacle::PointKind::Joint)
 }

@@ -23,7 +23,7 @@
 
 use crate::kinematics::Frames;
 use crate::math::{min, norm, Vec3};
-use crate::obstacle::{Obstacle, Pair, PointKind};
+use crate::obstacle::{Pair, PointKind, World};
 use crate::robot::{JointKind, Robot};
 use crate::settings_field::{first_bad, non_negative, positive, SettingsField};
 
@@ -228,7 +228,7 @@ pub struct ObstacleField {
 pub fn potential_gradient<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
-    obstacles: &[Obstacle],
+    obstacles: World<'_>,
     settings: &AvoidanceSettings,
     mu: &mut [f32],
     distance_sq: &mut [f32],
@@ -279,26 +279,27 @@ pub fn potential_gradient<const N: usize>(
                         others_sq = min(others_sq, distance_sq);
                     }
                 };
-                let (clearance, gradient) = match obstacle.pair(&point.position, point.kind) {
-                    Pair::Far => continue,
-                    Pair::Beyond { distance_sq } => {
-                        // Beyond the potential's cut-off: only the distance counts.
-                        nearer(distance_sq);
-                        continue;
-                    }
-                    Pair::Inside { clearance, .. } => {
-                        nearer(0.0);
-                        (clearance, None)
-                    }
-                    Pair::Near {
-                        clearance,
-                        gradient,
-                        distance_sq,
-                    } => {
-                        nearer(distance_sq);
-                        (clearance, Some(gradient))
-                    }
-                };
+                let (clearance, gradient) =
+                    match obstacle.pair(&point.position, point.kind, obstacles.hulls) {
+                        Pair::Far => continue,
+                        Pair::Beyond { distance_sq } => {
+                            // Beyond the potential's cut-off: only the distance counts.
+                            nearer(distance_sq);
+                            continue;
+                        }
+                        Pair::Inside { clearance, .. } => {
+                            nearer(0.0);
+                            (clearance, None)
+                        }
+                        Pair::Near {
+                            clearance,
+                            gradient,
+                            distance_sq,
+                        } => {
+                            nearer(distance_sq);
+                            (clearance, Some(gradient))
+                        }
+                    };
                 // Within the potential's influence: `clearance` is finite.
                 active_pairs += 1;
                 if clearance < closest {
@@ -367,7 +368,7 @@ pub fn potential_gradient<const N: usize>(
 #[inline(never)]
 fn half_space<const N: usize>(
     frames: &Frames<N>,
-    obstacles: &[Obstacle],
+    obstacles: World<'_>,
     settings: &AvoidanceSettings,
     link: u8,
     point: u16,
@@ -398,7 +399,7 @@ fn half_space<const N: usize>(
 #[inline(never)]
 pub fn surface_normal<const N: usize>(
     frames: &Frames<N>,
-    obstacles: &[Obstacle],
+    obstacles: World<'_>,
     settings: &AvoidanceSettings,
     point: u16,
     obstacle: u8,
@@ -407,9 +408,11 @@ pub fn surface_normal<const N: usize>(
     let per = settings.points_per_link_total().max(1);
     let link = point as usize / per;
     let at = link_points(frames, settings, link).nth(point as usize - link * per)?;
-    let contact = obstacles
-        .get(obstacle as usize)?
-        .contact(&at.position, kind.unwrap_or(at.kind))?;
+    let contact = obstacles.get(obstacle as usize)?.contact(
+        &at.position,
+        kind.unwrap_or(at.kind),
+        obstacles.hulls,
+    )?;
     let slope = norm(&contact.gradient);
     if !(contact.clearance > 0.0 && contact.clearance.is_finite() && slope > 0.0) {
         return None;

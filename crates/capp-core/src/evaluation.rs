@@ -173,7 +173,7 @@ impl<const N: usize> Evaluation<N> {
         self.field = potential_gradient(
             robot,
             &self.frames,
-            scenario.obstacles(),
+            scenario.world(),
             &scenario.settings().avoidance,
             &mut self.mu,
             &mut self.distance_sq,

@@ -82,7 +82,7 @@ pub mod target;
 pub mod tracker;
 
 pub use mission::{Mission, MissionError, Motion, Settings, Waypoint};
-pub use obstacle::{ObstacleError, Shape, Solid, SuperEllipsoid};
+pub use obstacle::{Hull, HullError, ObstacleError, Shape, Solid, SuperEllipsoid, World};
 pub use planner::{Outcome, Phase, Planner, StartError, StepError, StepReport};
 pub use robot::{Joint, JointKind, Robot, RobotError};
 pub use scenario::{Scenario, ScenarioError};

@@ -4,7 +4,7 @@
 use crate::kinematics::{forward_kinematics, Frames};
 use crate::math::{is_rotation, vec3, Mat3};
 use crate::mission::{JointGoalProblem, Mission, MissionError, Settings, Waypoint};
-use crate::obstacle::{Obstacle, ObstacleError, Solid, MAX_EXTENT};
+use crate::obstacle::{Hull, Obstacle, ObstacleError, Solid, World, MAX_EXTENT, MAX_HULLS};
 use crate::robot::{Joint, Placement, Robot, RobotError};
 use crate::self_collision::{CapsuleError, LinkCapsules};
 use crate::target::Target;
@@ -91,6 +91,8 @@ impl core::fmt::Display for ScenarioError {
 pub struct Scenario<const N: usize, const M: usize, const W: usize> {
     robot: Robot<N>,
     obstacles: heapless::Vec<Obstacle, M>,
+    /// The hulls convex obstacles name ([`Scenario::init_with_hulls`]).
+    hulls: heapless::Vec<Hull, MAX_HULLS>,
     targets: heapless::Vec<Target, W>,
     /// Joint configurations some targets are ([`Scenario::set_joint_goal`]).
     joint_goals: heapless::Vec<[f32; N], MAX_JOINT_GOALS>,
@@ -113,7 +115,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     ) -> Result<Self, ScenarioError> {
         let mut scenario = Self::empty();
         scenario.robot = robot;
-        scenario.fill(obstacles, &mission.waypoints, mission.settings)?;
+        scenario.fill(obstacles, &[], &mission.waypoints, mission.settings)?;
         Ok(scenario)
     }
 
@@ -124,6 +126,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         Scenario {
             robot: Robot::empty(),
             obstacles: heapless::Vec::new(),
+            hulls: heapless::Vec::new(),
             targets: heapless::Vec::new(),
             joint_goals: heapless::Vec::new(),
             settings: Settings::default(),
@@ -156,6 +159,22 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         waypoints: &[Waypoint],
         settings: Settings,
     ) -> Result<(), ScenarioError> {
+        self.init_with_hulls(joints, tool, obstacles, &[], waypoints, settings)
+    }
+
+    /// [`Scenario::init_with_tool`] with convex hulls: `hulls[i]` is hull
+    /// `i`'s vertices (its obstacle's frame, length units), which a
+    /// [`crate::Shape::Convex`] obstacle names by `i`. At most
+    /// [`MAX_HULLS`], each validated by [`Hull::new`].
+    pub fn init_with_hulls<S: Into<Solid> + Copy>(
+        &mut self,
+        joints: &[Joint],
+        tool: &Placement,
+        obstacles: &[S],
+        hulls: &[&[[f32; 3]]],
+        waypoints: &[Waypoint],
+        settings: Settings,
+    ) -> Result<(), ScenarioError> {
         let result = self
             .robot
             .init_with_tool(joints, tool)
@@ -167,7 +186,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
                     Ok(())
                 }
             })
-            .and_then(|()| self.fill(obstacles, waypoints, settings));
+            .and_then(|()| self.fill(obstacles, hulls, waypoints, settings));
         if result.is_err() {
             self.clear();
         }
@@ -177,7 +196,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// Makes this scenario [`Scenario::empty`], in place.
     pub fn clear(&mut self) {
         self.robot.clear();
-        let _ = self.fill::<Solid>(&[], &[], Settings::default());
+        let _ = self.fill::<Solid>(&[], &[], &[], Settings::default());
     }
 
     /// Rebuilds every field but the robot (validated by `Robot::new` /
@@ -185,6 +204,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     fn fill<S: Into<Solid> + Copy>(
         &mut self,
         obstacles: &[S],
+        hulls: &[&[[f32; 3]]],
         waypoints: &[Waypoint],
         settings: Settings,
     ) -> Result<(), ScenarioError> {
@@ -192,6 +212,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         let Scenario {
             robot,
             obstacles: validated,
+            hulls: kept_hulls,
             targets,
             joint_goals,
             settings: kept_settings,
@@ -203,6 +224,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             *limits = DriveLimits::from_rate(joint.max_rate);
         }
         validated.clear();
+        kept_hulls.clear();
         targets.clear();
         joint_goals.clear();
         *kept_settings = settings;
@@ -213,10 +235,22 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             }
             .into());
         }
+        if hulls.len() > MAX_HULLS {
+            return Err(ObstacleError::TooManyHulls {
+                capacity: MAX_HULLS,
+            }
+            .into());
+        }
+        for (i, vertices) in hulls.iter().enumerate() {
+            let hull =
+                Hull::new(vertices).map_err(|why| ObstacleError::BadHull { hull: i as u8, why })?;
+            let _ = kept_hulls.push(hull);
+        }
         for (i, s) in obstacles.iter().enumerate() {
-            let o = Obstacle::new(
+            let o = Obstacle::new_in(
                 i as u8,
                 s,
+                kept_hulls,
                 settings.avoidance.margins(),
                 settings.avoidance.influence_distance,
             )?;
@@ -262,6 +296,19 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// The validated obstacles.
     pub fn obstacles(&self) -> &[Obstacle] {
         &self.obstacles
+    }
+
+    /// The validated hulls convex obstacles name.
+    pub fn hulls(&self) -> &[Hull] {
+        &self.hulls
+    }
+
+    /// The obstacles with the hulls they name: what the pair code reads.
+    pub fn world(&self) -> World<'_> {
+        World {
+            obstacles: &self.obstacles,
+            hulls: &self.hulls,
+        }
     }
 
     /// The waypoints, pose by pose (a joint goal's is its configuration's).

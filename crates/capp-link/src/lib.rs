@@ -109,6 +109,9 @@ pub struct Upload<'a> {
     pub drive: &'a [capp_core::tracker::limits::DriveLimits],
     /// The obstacles.
     pub obstacles: &'a [capp_core::Solid],
+    /// The hulls convex obstacles name, by index: each one's vertices (the
+    /// host's `Scenario::hulls()`).
+    pub hulls: &'a [&'a [[f32; 3]]],
     /// The waypoints (the last is the target).
     pub waypoints: &'a [capp_core::Waypoint],
     /// Which of them are joint configurations: (waypoint index, one value per
@@ -341,6 +344,9 @@ impl<T: Read + Write> Link<T> {
         if upload.obstacles.len() > capp_proto::MAX_OBSTACLES {
             return Err(LinkError::TooLarge("obstacles"));
         }
+        if upload.hulls.len() > capp_proto::MAX_HULLS {
+            return Err(LinkError::TooLarge("hulls"));
+        }
         if upload.waypoints.len() > capp_proto::MAX_WAYPOINTS {
             return Err(LinkError::TooLarge("waypoints"));
         }
@@ -372,6 +378,14 @@ impl<T: Read + Write> Link<T> {
                     max_accel: d.max_accel,
                     max_jerk: d.max_jerk,
                 },
+            })?;
+        }
+        for (i, h) in upload.hulls.iter().enumerate() {
+            let vertices = capp_proto::HullVertices::from_slice(h)
+                .map_err(|_| LinkError::TooLarge("hull vertices"))?;
+            self.expect_ack(&Command::Hull {
+                index: i as u8,
+                vertices,
             })?;
         }
         for (i, o) in upload.obstacles.iter().enumerate() {

@@ -86,8 +86,9 @@ use capp_core::{
     SetpointFilter, Solid, StartError,
 };
 use capp_proto::{
-    Command, ErrorCode, EscapeMode, Feed, FrameError, Joints, Part, Preset, Reply, State, Status,
-    MAX_FRAME, MAX_JOINTS as N, MAX_OBSTACLES as M, MAX_WAYPOINTS as W, NO_COMMAND, NO_INDEX,
+    Command, ErrorCode, EscapeMode, Feed, FrameError, HullVertices, Joints, Part, Preset, Reply,
+    State, Status, MAX_FRAME, MAX_HULLS, MAX_JOINTS as N, MAX_OBSTACLES as M, MAX_WAYPOINTS as W,
+    NO_COMMAND, NO_INDEX,
 };
 use embedded_hal_nb::{nb, serial};
 use heapless::{Deque, Vec};
@@ -110,6 +111,8 @@ pub trait Ticker {
 struct Draft {
     joints: Vec<capp_core::Joint, N>,
     obstacles: Vec<Solid, M>,
+    /// The hulls convex obstacles name, their vertices as sent.
+    hulls: Vec<HullVertices, MAX_HULLS>,
     waypoints: Vec<capp_core::Waypoint, W>,
     /// Waypoints that are joint configurations: (waypoint index, values).
     joint_goals: Vec<(u8, Vec<f32, N>), MAX_JOINT_GOALS>,
@@ -133,6 +136,7 @@ impl Draft {
         Draft {
             joints: Vec::new(),
             obstacles: Vec::new(),
+            hulls: Vec::new(),
             waypoints: Vec::new(),
             joint_goals: Vec::new(),
             settings: None,
@@ -150,6 +154,7 @@ impl Draft {
         let Draft {
             joints,
             obstacles,
+            hulls,
             waypoints,
             joint_goals,
             settings,
@@ -162,6 +167,7 @@ impl Draft {
         } = self;
         joints.clear();
         obstacles.clear();
+        hulls.clear();
         waypoints.clear();
         joint_goals.clear();
         *settings = None;
@@ -204,7 +210,10 @@ impl Draft {
                     d.clear_drives();
                     d.tool = Placement::IDENTITY;
                 }
-                Part::Obstacles => d.obstacles.clear(),
+                Part::Obstacles => {
+                    d.obstacles.clear();
+                    d.hulls.clear();
+                }
                 Part::Waypoints => {
                     d.waypoints.clear();
                     d.joint_goals.clear();
@@ -241,6 +250,10 @@ impl Draft {
                     .iter()
                     .all(|v| finite(v));
                 append(&mut d.obstacles, *index, Solid::from(o), ok)?;
+            }
+            Command::Hull { index, vertices } => {
+                let ok = vertices.iter().all(|v| finite(v));
+                append(&mut d.hulls, *index, vertices.clone(), ok)?;
             }
             Command::Waypoint { index, waypoint } => {
                 let w = *waypoint;
@@ -660,11 +673,16 @@ impl<const TXQ: usize> Node<TXQ> {
         // (the state is not `Running`), and the status as it was.
         let d = &self.draft;
         let plan = &mut self.plan;
+        let mut hulls: [&[[f32; 3]]; MAX_HULLS] = [&[]; MAX_HULLS];
+        for (slot, vertices) in hulls.iter_mut().zip(&d.hulls) {
+            *slot = vertices;
+        }
         plan.scenario
-            .init_with_tool(
+            .init_with_hulls(
                 &d.joints,
                 &d.tool,
                 &d.obstacles,
+                &hulls[..d.hulls.len()],
                 &d.waypoints,
                 d.settings.unwrap_or_default(),
             )
@@ -940,17 +958,17 @@ fn robot_refusal(e: RobotError) -> Refusal {
 fn scenario_refusal(e: ScenarioError) -> Refusal {
     match e {
         ScenarioError::Robot(e) => robot_refusal(e),
-        ScenarioError::Obstacle(e) => {
-            let index = match e {
-                ObstacleError::TooMany { .. } => NO_INDEX,
-                ObstacleError::NotFinite { obstacle, .. }
-                | ObstacleError::SemiAxisOutOfRange { obstacle }
-                | ObstacleError::CentreOutOfRange { obstacle }
-                | ObstacleError::ExponentOutOfRange { obstacle }
-                | ObstacleError::SizeOutOfRange { obstacle } => obstacle,
-            };
-            (ErrorCode::InvalidObstacle, index)
-        }
+        ScenarioError::Obstacle(e) => match e {
+            ObstacleError::TooMany { .. } => (ErrorCode::InvalidObstacle, NO_INDEX),
+            ObstacleError::NotFinite { obstacle, .. }
+            | ObstacleError::SemiAxisOutOfRange { obstacle }
+            | ObstacleError::CentreOutOfRange { obstacle }
+            | ObstacleError::ExponentOutOfRange { obstacle }
+            | ObstacleError::SizeOutOfRange { obstacle }
+            | ObstacleError::NoSuchHull { obstacle } => (ErrorCode::InvalidObstacle, obstacle),
+            ObstacleError::TooManyHulls { .. } => (ErrorCode::InvalidHull, NO_INDEX),
+            ObstacleError::BadHull { hull, .. } => (ErrorCode::InvalidHull, hull),
+        },
         ScenarioError::Mission(e) => {
             let index = match e {
                 MissionError::BadPosition { waypoint }

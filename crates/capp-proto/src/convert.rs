@@ -123,6 +123,7 @@ impl From<Solid> for Obstacle {
                 [0.0; 3],
                 Some(Primitive::Cylinder { radius, length }),
             ),
+            Shape::Convex { hull } => ([0.0; 3], [0.0; 3], Some(Primitive::Convex { hull })),
         };
         Obstacle {
             centre: s.centre,
@@ -151,6 +152,7 @@ impl From<Obstacle> for Solid {
             Some(Primitive::Cuboid { half_extents }) => Shape::Cuboid { half_extents },
             Some(Primitive::Capsule { radius, length }) => Shape::Capsule { radius, length },
             Some(Primitive::Cylinder { radius, length }) => Shape::Cylinder { radius, length },
+            Some(Primitive::Convex { hull }) => Shape::Convex { hull },
         };
         Solid {
             centre: o.centre,

@@ -37,11 +37,17 @@ pub use frame::{decode, decode_command, encode, Accumulator, Feed, FrameError, M
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 10;
+pub const VERSION: u8 = 11;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
 pub const MAX_OBSTACLES: usize = 64;
+/// Most hulls in a load (since version 11).
+pub const MAX_HULLS: usize = capp_core::obstacle::MAX_HULLS;
+/// Most vertices a hull has (since version 11).
+pub const MAX_HULL_VERTICES: usize = capp_core::obstacle::MAX_HULL_VERTICES;
+/// A hull's vertices, `[x, y, z]` each in its obstacle's frame.
+pub type HullVertices = heapless::Vec<[f32; 3], MAX_HULL_VERTICES>;
 /// Most waypoints a load may hold.
 pub const MAX_WAYPOINTS: usize = 16;
 /// The `command` field of an [`Reply::Error`] when the command could not be
@@ -161,6 +167,12 @@ pub enum Primitive {
         radius: f32,
         /// Full length.
         length: f32,
+    },
+    /// 4: the convex hull of the load's hull number `hull` (0-based, sent
+    /// by [`Command::Hull`]; since version 11).
+    Convex {
+        /// The hull.
+        hull: u8,
     },
 }
 
@@ -407,6 +419,16 @@ pub enum Command {
     /// since version 9). Until one is sent (and after `Clear(All)`,
     /// `Clear(Robot)` or `Preset`) the identity.
     Tool(Placement),
+    /// 15: append hull `index`'s vertices (4 to [`MAX_HULL_VERTICES`], its
+    /// obstacles' frame, length units); `index` must equal the number of
+    /// hulls loaded (since version 11). A [`Primitive::Convex`] obstacle
+    /// names it; `Clear(Obstacles)` empties the hulls too.
+    Hull {
+        /// The hull (0-based).
+        index: u8,
+        /// Its vertices.
+        vertices: HullVertices,
+    },
 }
 
 impl Command {
@@ -428,6 +450,7 @@ impl Command {
             Command::Capsule { .. } => 12,
             Command::Drive { .. } => 13,
             Command::Tool(_) => 14,
+            Command::Hull { .. } => 15,
         }
     }
 }
@@ -473,6 +496,9 @@ pub enum ErrorCode {
     /// acceleration or jerk limit is not positive, or `NO_INDEX` when their
     /// number is not the number of joints; since version 8).
     InvalidDrive,
+    /// 16: a hull failed validation (`index` = the hull, or `NO_INDEX`:
+    /// too many; since version 11).
+    InvalidHull,
 }
 
 /// Where the board is.

@@ -48,10 +48,11 @@ pub enum Primitive {
 
 impl Primitive {
     /// The primitive a user's shape is, in this module's terms (half
-    /// lengths); `None` for a super-ellipsoid (not measured on distance).
+    /// lengths); `None` for a super-ellipsoid (not measured on distance)
+    /// and a hull (measured by [`super::hull::Hull::distance`]).
     pub fn of(shape: &Shape) -> Option<Primitive> {
         match *shape {
-            Shape::SuperEllipsoid { .. } => None,
+            Shape::SuperEllipsoid { .. } | Shape::Convex { .. } => None,
             Shape::Sphere { radius } => Some(Primitive::Sphere { radius }),
             Shape::Cuboid { half_extents } => Some(Primitive::Cuboid {
                 half_extents: vec3(half_extents),

@@ -50,9 +50,11 @@
 use crate::math::{max, rotation_123, vec3, Mat3, Vec3};
 
 pub mod distance;
+pub mod hull;
 mod solid;
 
 use distance::{from_box, from_segment, signed_distance, Primitive};
+pub use hull::{Hull, HullError, MAX_HULLS, MAX_HULL_VERTICES};
 pub use solid::{Shape, Solid};
 
 /// Largest `C` that still counts as "within influence"; the potential `1/(C-1)`
@@ -144,6 +146,23 @@ pub enum ObstacleError {
         /// The obstacle.
         obstacle: u8,
     },
+    /// A convex obstacle names a hull the scenario does not have.
+    NoSuchHull {
+        /// The obstacle.
+        obstacle: u8,
+    },
+    /// More hulls than [`MAX_HULLS`].
+    TooManyHulls {
+        /// Capacity.
+        capacity: usize,
+    },
+    /// A hull's vertices were rejected. `hull` is 0-based.
+    BadHull {
+        /// The hull.
+        hull: u8,
+        /// Why.
+        why: HullError,
+    },
 }
 
 impl core::fmt::Display for ObstacleParameter {
@@ -187,6 +206,15 @@ impl core::fmt::Display for ObstacleError {
                 "obstacle {}: every radius, length and half-extent must be between {MIN_SEMI_AXIS} and {MAX_EXTENT}",
                 obstacle as u32 + 1
             ),
+            ObstacleError::NoSuchHull { obstacle } => {
+                write!(f, "obstacle {}: no such hull", obstacle as u32 + 1)
+            }
+            ObstacleError::TooManyHulls { capacity } => {
+                write!(f, "more hulls than the capacity of {capacity}")
+            }
+            ObstacleError::BadHull { hull, why } => {
+                write!(f, "hull {}: {why}", hull as u32 + 1)
+            }
         }
     }
 }
@@ -324,6 +352,9 @@ enum Powers {
     /// primitive inside it made the enum 20 bytes and every
     /// super-ellipsoid pair 4 instructions slower.
     Primitive,
+    /// A convex hull, measured on distance by GJK (the scenario's hull
+    /// number `hull`).
+    Hull,
 }
 
 impl Powers {
@@ -451,11 +482,42 @@ fn round(v: &Vec3, radius: f32, inflated: &Inflated) -> (f32, Vec3, f32) {
 }
 
 /// Half-extents of the smallest box about the centre, in the obstacle's own
-/// frame, that holds `s` (a super-ellipsoid's semi-axes), length units.
-fn half_box(s: &Solid) -> Vec3 {
+/// frame, that holds `s` (a super-ellipsoid's semi-axes), length units; a
+/// hull's from `hulls`.
+fn half_box(s: &Solid, hulls: &[Hull]) -> Vec3 {
     match s.shape {
         Shape::SuperEllipsoid { semi_axes, .. } => vec3(semi_axes),
+        Shape::Convex { hull } => hulls
+            .get(hull as usize)
+            .map_or(Vec3::zeros(), |h| h.half_box()),
         ref shape => Primitive::of(shape).map_or(Vec3::zeros(), |p| p.half_box()),
+    }
+}
+
+/// The obstacles of a scenario and the hulls its convex ones name: what the
+/// pair code reads. Dereferences to the obstacles.
+#[derive(Clone, Copy, Debug)]
+pub struct World<'a> {
+    /// The obstacles.
+    pub obstacles: &'a [Obstacle],
+    /// The hulls, by index ([`Shape::Convex`]).
+    pub hulls: &'a [Hull],
+}
+
+impl<'a> World<'a> {
+    /// Obstacles with no hulls (none of them convex).
+    pub fn of(obstacles: &'a [Obstacle]) -> Self {
+        World {
+            obstacles,
+            hulls: &[],
+        }
+    }
+}
+
+impl core::ops::Deref for World<'_> {
+    type Target = [Obstacle];
+    fn deref(&self) -> &[Obstacle] {
+        self.obstacles
     }
 }
 
@@ -475,9 +537,15 @@ pub struct Obstacle {
     exponents: [Exponent; 3],
     /// `R` (obstacle axes in world coordinates, as columns).
     rotation: Mat3,
-    /// The primitive measured on distance; `None` for a super-ellipsoid.
+    /// The primitive measured on distance; `None` for a super-ellipsoid
+    /// and a hull.
     primitive: Option<Primitive>,
-    /// A primitive's inradius `rho`, length units.
+    /// A convex obstacle's hull, an index into the scenario's list.
+    hull: u8,
+    /// Half-extents of the box about the centre holding the shape, its
+    /// own frame, length units.
+    half_box: Vec3,
+    /// A primitive's inradius `rho` (a hull's half-width), length units.
     inradius: f32,
     /// The influence distance, length units.
     influence: f32,
@@ -487,10 +555,23 @@ pub struct Obstacle {
 impl Obstacle {
     /// Validates `s` (as obstacle number `index`) and inflates it by the
     /// margins (joint, link) and the influence distance, all non-negative
-    /// finite lengths already checked by the caller.
+    /// finite lengths already checked by the caller. Not a hull
+    /// ([`Obstacle::new_in`]).
     pub fn new<S: Into<Solid> + Copy>(
         index: u8,
         s: &S,
+        margins: [f32; 2],
+        influence: f32,
+    ) -> Result<Self, ObstacleError> {
+        Self::new_in(index, s, &[], margins, influence)
+    }
+
+    /// [`Obstacle::new`] in a scenario with `hulls` (a convex obstacle
+    /// names one of them).
+    pub fn new_in<S: Into<Solid> + Copy>(
+        index: u8,
+        s: &S,
+        hulls: &[Hull],
         margins: [f32; 2],
         influence: f32,
     ) -> Result<Self, ObstacleError> {
@@ -535,10 +616,16 @@ impl Obstacle {
             return Err(ObstacleError::ExponentOutOfRange { obstacle });
         }
         let primitive = Primitive::of(&s.shape);
-        let inradius = primitive.map_or(0.0, |p| p.inradius());
+        let (hull, inradius) = match s.shape {
+            Shape::Convex { hull } => match hulls.get(hull as usize) {
+                Some(h) => (hull, h.half_width()),
+                None => return Err(ObstacleError::NoSuchHull { obstacle }),
+            },
+            _ => (0, primitive.map_or(0.0, |p| p.inradius())),
+        };
         let [rx, ry, rz] = s.euler_123;
         let rotation = rotation_123(rx, ry, rz);
-        let axes = half_box(&s);
+        let axes = half_box(&s, hulls);
         // A sphere is the same turned any way: its rotation is skipped.
         let aligned = s.euler_123 == [0.0; 3] || matches!(s.shape, Shape::Sphere { .. });
         let inflated = margins.map(|m| {
@@ -563,13 +650,16 @@ impl Obstacle {
             centre: vec3(s.centre.map(|c| if c == 0.0 { -0.0 } else { c })),
             inflated,
             aligned,
-            powers: match primitive {
-                Some(_) => Powers::Primitive,
-                None => Powers::new(exponents),
+            powers: match (primitive, s.shape) {
+                (Some(_), _) => Powers::Primitive,
+                (None, Shape::Convex { .. }) => Powers::Hull,
+                (None, _) => Powers::new(exponents),
             },
             exponents: exponents.map(Exponent::new),
             rotation,
             primitive,
+            hull,
+            half_box: axes,
             inradius,
             influence,
             source: s,
@@ -595,7 +685,7 @@ impl Obstacle {
     /// shape's bounding box (`|semi-axes|`), length units: its size, for
     /// deciding whether to go round it.
     pub fn bounding_radius(&self) -> f32 {
-        let axes = half_box(&self.source);
+        let axes = &self.half_box;
         crate::math::sqrt(axes.iter().map(|a| a * a).sum::<f32>())
     }
 
@@ -606,7 +696,7 @@ impl Obstacle {
         let local = self.rotation.transpose() * u;
         local
             .iter()
-            .zip(half_box(&self.source).iter())
+            .zip(self.half_box.iter())
             .map(|(l, a)| l.abs() * (a + margin))
             .sum()
     }
@@ -616,7 +706,7 @@ impl Obstacle {
     /// of the semi-axes, and whether on that axis' positive side.
     pub fn side_of(&self, point: &Vec3) -> (u8, bool) {
         let x = self.rotation.transpose() * (point - self.centre());
-        let axes = half_box(&self.source);
+        let axes = &self.half_box;
         let (mut axis, mut far, mut positive) = (0u8, f32::NEG_INFINITY, true);
         for (i, (&xi, &a)) in x.iter().zip(axes.iter()).enumerate() {
             let u = xi.abs() / max(a, f32::MIN_POSITIVE);
@@ -630,9 +720,11 @@ impl Obstacle {
     /// `C(p) - 1`, its gradient and a distance bound for a point of `kind`, or
     /// `None` when the point is outside the influence region (then it is at
     /// least the influence distance from the inflated surface).
+    /// `hulls` are the scenario's ([`World::hulls`]; a convex obstacle
+    /// names one).
     #[inline(always)]
-    pub fn contact(&self, p: &Vec3, kind: PointKind) -> Option<Contact> {
-        match self.pair(p, kind) {
+    pub fn contact(&self, p: &Vec3, kind: PointKind, hulls: &[Hull]) -> Option<Contact> {
+        match self.pair(p, kind, hulls) {
             Pair::Far => None,
             Pair::Beyond { distance_sq } => Some(Contact {
                 clearance: f32::INFINITY,
@@ -665,7 +757,7 @@ impl Obstacle {
     // Always inlined: most pairs end at the box test, which then costs a
     // dozen instructions instead of a call.
     #[inline(always)]
-    pub(crate) fn pair(&self, p: &Vec3, kind: PointKind) -> Pair {
+    pub(crate) fn pair(&self, p: &Vec3, kind: PointKind, hulls: &[Hull]) -> Pair {
         let inflated = match kind {
             PointKind::Joint => &self.inflated[0],
             PointKind::Link => &self.inflated[1],
@@ -718,6 +810,7 @@ impl Obstacle {
                     None => Pair::Far,
                 }
             }
+            Powers::Hull => return self.hull_pair(hulls, inflated, &x),
             Powers::Same2 => (
                 even_term_and_gradient::<2>(x.x, inv.x),
                 even_term_and_gradient::<2>(x.y, inv.y),
@@ -858,6 +951,20 @@ impl Obstacle {
         self.primitive_tail(clearance, local_gradient, gap)
     }
 
+    /// [`Obstacle::pair`] for a hull, the local point `x` within its
+    /// influence box: `C` rebuilt on the GJK distance `d` (0 inside), `rho`
+    /// the hull's half-width; the distance bound from GJK's lower bound.
+    #[cold]
+    #[inline(never)]
+    fn hull_pair(&self, hulls: &[Hull], inflated: &Inflated, x: &Vec3) -> Pair {
+        let Some(hull) = hulls.get(self.hull as usize) else {
+            return Pair::Far;
+        };
+        let d = hull.distance(x);
+        let (clearance, gradient) = self.rebuilt(d.distance, &d.normal, inflated);
+        self.primitive_tail(clearance, gradient, d.lower_bound - inflated.margin)
+    }
+
     /// [`Obstacle::pair`] for a sphere, inline and without a root or a
     /// call (`rho` is the radius `r`, so `C = |x|^2 / (m + r)^2`, exactly
     /// the ellipsoid's): the influence test on `|x|^2`, and for the
@@ -935,9 +1042,18 @@ impl Obstacle {
         (u * u - 1.0, normal * (2.0 * u * inflated.inv_scale))
     }
 
-    /// `C(p) - 1` with no influence cut-off (for reporting and checks; may be `inf`).
-    pub fn clearance_uncut(&self, p: &Vec3, kind: PointKind) -> f32 {
+    /// `C(p) - 1` with no influence cut-off (for reporting and checks; may
+    /// be `inf`); `hulls` as for [`Obstacle::contact`].
+    pub fn clearance_uncut(&self, p: &Vec3, kind: PointKind, hulls: &[Hull]) -> f32 {
         let x = self.rotation.tr_mul(&(p - self.centre()));
+        if let Shape::Convex { hull } = self.source.shape {
+            let d = hulls
+                .get(hull as usize)
+                .map_or(f32::INFINITY, |h| h.distance(&x).distance);
+            return self
+                .rebuilt(d, &Vec3::zeros(), &self.inflated[kind as usize])
+                .0;
+        }
         if let Some(primitive) = &self.primitive {
             let (d, normal) = signed_distance(primitive, &x);
             return self.rebuilt(d, &normal, &self.inflated[kind as usize]).0;
@@ -972,10 +1088,12 @@ mod tests {
         for k in [1.0, 2.0, 2.5, 8.0] {
             let o = unit_ball(k);
             for p in [[2.0, 2.0, 3.0], [1.0, 4.0, 3.0], [1.0, 2.0, -1.0]] {
-                let c = o.contact(&vec3(p), PointKind::Joint).unwrap();
+                let c = o.contact(&vec3(p), PointKind::Joint, &[]).unwrap();
                 assert!(c.clearance.abs() < 1e-6, "k={k} p={p:?} {c:?}");
             }
-            let inside = o.contact(&vec3([1.2, 2.1, 3.0]), PointKind::Joint).unwrap();
+            let inside = o
+                .contact(&vec3([1.2, 2.1, 3.0]), PointKind::Joint, &[])
+                .unwrap();
             assert!(inside.clearance < 0.0);
         }
     }
@@ -991,14 +1109,14 @@ mod tests {
         };
         let o = Obstacle::new(0, &s, [0.0, 0.0], 10.0).unwrap();
         let along_y = o
-            .contact(&vec3([10.0, 4.0, 0.0]), PointKind::Joint)
+            .contact(&vec3([10.0, 4.0, 0.0]), PointKind::Joint, &[])
             .unwrap();
         assert!(
             along_y.clearance < 0.0,
             "inside along the rotated long axis"
         );
         let along_x = o
-            .contact(&vec3([14.0, 0.0, 0.0]), PointKind::Joint)
+            .contact(&vec3([14.0, 0.0, 0.0]), PointKind::Joint, &[])
             .unwrap();
         assert!(along_x.clearance > 0.0, "outside across it");
     }
@@ -1013,8 +1131,8 @@ mod tests {
         )
         .unwrap();
         let p = vec3([5.0, 0.0, 0.0]);
-        assert!(o.contact(&p, PointKind::Joint).unwrap().clearance < 0.0);
-        assert!(o.contact(&p, PointKind::Link).unwrap().clearance > 0.0);
+        assert!(o.contact(&p, PointKind::Joint, &[]).unwrap().clearance < 0.0);
+        assert!(o.contact(&p, PointKind::Link, &[]).unwrap().clearance > 0.0);
     }
 
     #[test]
@@ -1032,11 +1150,11 @@ mod tests {
             [3.0e38, 0.0, 1.0],
             [0.0; 3],
         ] {
-            if let Some(c) = o.contact(&vec3(p), PointKind::Link) {
+            if let Some(c) = o.contact(&vec3(p), PointKind::Link, &[]) {
                 assert!(!c.clearance.is_nan() && c.gradient.iter().all(|g| g.is_finite()));
                 assert!(!c.distance_sq.is_nan());
             }
-            assert!(!o.clearance_uncut(&vec3(p), PointKind::Link).is_nan());
+            assert!(!o.clearance_uncut(&vec3(p), PointKind::Link, &[]).is_nan());
         }
     }
 
@@ -1070,7 +1188,7 @@ mod tests {
             let o = Obstacle::new(0, &s, [0.5, 0.25], 20.0).unwrap();
             for _ in 0..200 {
                 let p = o.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 9.0;
-                let Some(c) = o.contact(&p, PointKind::Joint) else {
+                let Some(c) = o.contact(&p, PointKind::Joint, &[]) else {
                     continue;
                 };
                 if c.clearance <= 0.0 {
@@ -1086,7 +1204,7 @@ mod tests {
                     }
                     let y = p + dir * (0.999 * d * lcg(&mut rng).abs() / len);
                     assert!(
-                        o.clearance_uncut(&y, PointKind::Joint) > -1e-5,
+                        o.clearance_uncut(&y, PointKind::Joint, &[]) > -1e-5,
                         "k={exponents:?} p={p:?} bound {d} reaches inside"
                     );
                 }
@@ -1100,7 +1218,9 @@ mod tests {
             10.0,
         )
         .unwrap();
-        let c = o.contact(&vec3([4.5, 0.0, 0.0]), PointKind::Joint).unwrap();
+        let c = o
+            .contact(&vec3([4.5, 0.0, 0.0]), PointKind::Joint, &[])
+            .unwrap();
         assert!((c.distance_sq.sqrt() - 1.5).abs() < 1e-4, "{c:?}");
     }
 
@@ -1218,7 +1338,7 @@ mod tests {
                 for p in points {
                     for kind in [PointKind::Joint, PointKind::Link] {
                         assert_eq!(
-                            bits(o.contact(&p, kind)),
+                            bits(o.contact(&p, kind, &[])),
                             bits(contact_per_axis(&o, &p, kind)),
                             "k={exponents:?} p={p:?}"
                         );
@@ -1345,7 +1465,7 @@ mod tests {
                 let (d, _) = distance::signed_distance(&shape, &local);
                 for kind in [PointKind::Joint, PointKind::Link] {
                     let m = margins[kind as usize];
-                    let Some(c) = o.contact(&p, kind) else {
+                    let Some(c) = o.contact(&p, kind, &[]) else {
                         assert!(d - m > 5.0 - 1e-4, "{solid:?}: {p:?} dropped at {d}");
                         continue;
                     };
@@ -1360,7 +1480,7 @@ mod tests {
                     } else {
                         assert!((bound - expected).abs() < 1e-5, "{bound} != {expected}");
                     }
-                    let uncut = o.clearance_uncut(&p, kind);
+                    let uncut = o.clearance_uncut(&p, kind, &[]);
                     assert!((uncut - c.clearance).abs() <= 1e-6 * (1.0 + uncut.abs()));
                 }
             }
@@ -1376,10 +1496,10 @@ mod tests {
             let mut checked = 0;
             while checked < 100 {
                 let p = o.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 4.0;
-                let Some(c) = o.contact(&p, PointKind::Link) else {
+                let Some(c) = o.contact(&p, PointKind::Link, &[]) else {
                     continue;
                 };
-                let f = |q: Vec3| o.clearance_uncut(&q, PointKind::Link);
+                let f = |q: Vec3| o.clearance_uncut(&q, PointKind::Link, &[]);
                 let central = Vec3::from_fn(|i, _| {
                     let (mut a, mut b) = (p, p);
                     a[i] += step;
@@ -1428,8 +1548,8 @@ mod tests {
             let p = sphere.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 6.0;
             for kind in [PointKind::Joint, PointKind::Link] {
                 let (a, b) = (
-                    sphere.clearance_uncut(&p, kind),
-                    ellipsoid.clearance_uncut(&p, kind),
+                    sphere.clearance_uncut(&p, kind, &[]),
+                    ellipsoid.clearance_uncut(&p, kind, &[]),
                 );
                 assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{p:?}: {a} {b}");
             }

@@ -38,6 +38,12 @@ pub enum Shape {
         /// Full length, > 0.
         length: f32,
     },
+    /// The convex hull of a vertex set in the shape's frame: the scenario's
+    /// hull number `hull` (0-based; [`super::hull`]).
+    Convex {
+        /// Index into the scenario's hull list.
+        hull: u8,
+    },
 }
 
 /// An obstacle as given: a [`Shape`] placed at `centre` with orientation
@@ -90,6 +96,8 @@ impl Solid {
             Shape::Capsule { radius, length } | Shape::Cylinder { radius, length } => {
                 ([radius, length, 0.0], 2)
             }
+            // A hull's size is its vertices', checked with them.
+            Shape::Convex { .. } => ([0.0; 3], 0),
         }
     }
 }

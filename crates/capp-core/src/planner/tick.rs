@@ -109,7 +109,7 @@ fn closest_approach<const N: usize, const M: usize, const W: usize>(
     let closest = now.field.clearance?;
     let (at, normal, _) = surface_normal(
         &now.frames,
-        scenario.obstacles(),
+        scenario.world(),
         &scenario.settings().avoidance,
         closest.point,
         closest.obstacle,

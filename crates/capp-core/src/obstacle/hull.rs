@@ -1,0 +1,739 @@
+//! Convex polytopes given by their vertices, and the distance from a point
+//! to one by GJK (Gilbert, Johnson and Keerthi 1988; the point query as van
+//! den Bergen, "Collision Detection in Interactive 3D Environments", 2004,
+//! ch. 4, writes it).
+//!
+//! A hull is the convex hull of 4 to [`MAX_HULL_VERTICES`] points in its
+//! obstacle's own frame. Its vertices are kept once, in the scenario's hull
+//! list (at most [`MAX_HULLS`]), and an obstacle of shape
+//! [`super::Shape::Convex`] names its hull by index, so a board's obstacle
+//! table does not grow by a vertex array per obstacle (64 obstacles of 32
+//! inline vertices would take 48 KiB in two copies).
+//!
+//! [`Hull::distance`] finds the closest point of the hull to a point `x`:
+//! each iteration takes the vertex farthest along the search direction (the
+//! support, one dot product a vertex) and the closest point of the simplex
+//! of at most four support points found so far (Ericson, "Real-Time
+//! Collision Detection", 2005, 5.1.5-5.1.6, by Voronoi regions). It stops
+//! when the support no longer moves the bound by more than f32 rounding, or
+//! after [`MAX_GJK_ITERATIONS`]: the work per query is bounded. It returns
+//! the distance `|x - v|` to the closest point `v` found (an upper bound,
+//! exact at convergence), the unit normal `(x - v) / |x - v|` (the
+//! distance's exact gradient), and the lower bound `(x - w) . n` from the
+//! last support `w` (no point of the hull lies beyond the plane through `w`
+//! normal to `n`), which conservative advancement takes. Inside the hull
+//! the distance is 0 and the normal points away from the vertices' mean: a
+//! depth inside would need the hull's faces (EPA), and the planner never
+//! lets a point in.
+//!
+//! Written here, not taken from `parry3d`: parry's point queries need its
+//! `alloc` shapes (`ConvexPolyhedron` holds `Vec`s) and are written for its
+//! own f32 rounding, so a board's answer and the host's would not be tied
+//! to one implementation; this one is 200 lines and its cost is in
+//! BENCHMARKS.md. The host's checker measures hulls with `parry3d-f64`
+//! independently.
+
+use crate::math::{sqrt, vec3, Vec3};
+
+/// Most hulls a scenario holds.
+pub const MAX_HULLS: usize = 8;
+/// Most vertices a hull has.
+pub const MAX_HULL_VERTICES: usize = 32;
+/// Fewest vertices a hull has (a tetrahedron).
+pub const MIN_HULL_VERTICES: usize = 4;
+/// Most GJK iterations per distance query. Each adds a hull vertex that
+/// strictly improves the bound, so in exact arithmetic the vertex count
+/// bounds them; in f32 it ends at rounding well before this.
+pub const MAX_GJK_ITERATIONS: usize = 24;
+
+/// Smallest accepted volume of a hull's largest tetrahedron, relative to
+/// the cube of its largest vertex spread: below it the hull is flat.
+const MIN_RELATIVE_VOLUME: f32 = 1.0e-6;
+
+/// Why a hull's vertices were rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HullError {
+    /// Fewer than [`MIN_HULL_VERTICES`] vertices.
+    TooFewVertices,
+    /// More than [`MAX_HULL_VERTICES`] vertices.
+    TooManyVertices {
+        /// The most a hull takes.
+        capacity: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    NotFinite,
+    /// A coordinate beyond [`super::MAX_EXTENT`].
+    OutOfRange,
+    /// The vertices span no volume (all on a plane, a line or a point), or
+    /// the hull is thinner than [`super::MIN_SEMI_AXIS`] across some axis.
+    Flat,
+}
+
+impl core::fmt::Display for HullError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            HullError::TooFewVertices => write!(
+                f,
+                "fewer than {MIN_HULL_VERTICES} vertices (a hull needs a volume)"
+            ),
+            HullError::TooManyVertices { capacity } => {
+                write!(f, "more than {capacity} vertices")
+            }
+            HullError::NotFinite => f.write_str("a vertex is not finite"),
+            HullError::OutOfRange => write!(
+                f,
+                "a vertex farther than {} from the obstacle's centre",
+                super::MAX_EXTENT
+            ),
+            HullError::Flat => f.write_str("the vertices are coplanar (no volume)"),
+        }
+    }
+}
+
+/// A validated hull: its vertices in the obstacle's frame and what the pair
+/// code needs of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hull {
+    vertices: heapless::Vec<Vec3, MAX_HULL_VERTICES>,
+    /// Half-extents of the smallest box about the frame's origin that holds
+    /// the hull, length units.
+    half_box: Vec3,
+    /// The vertices' mean.
+    mean: Vec3,
+    /// Half the hull's smallest width along the frame's axes, length units.
+    half_width: f32,
+}
+
+/// The distance from a point to a hull, [`Hull::distance`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HullDistance {
+    /// `|x - v|`, `v` the closest hull point found: an upper bound on the
+    /// distance, exact at convergence; 0 inside.
+    pub distance: f32,
+    /// The unit outward normal `(x - v) / |x - v|`, the gradient of the
+    /// distance (inside: away from the vertices' mean).
+    pub normal: Vec3,
+    /// A lower bound on the distance, `<= distance` (0 inside).
+    pub lower_bound: f32,
+}
+
+impl Hull {
+    /// Validates `vertices` (the obstacle's frame, length units): 4 to
+    /// [`MAX_HULL_VERTICES`] finite points within `MAX_EXTENT` of the origin
+    /// that span a volume. Vertices inside the hull are kept (they cost a
+    /// dot product a query and change no answer).
+    pub fn new(vertices: &[[f32; 3]]) -> Result<Self, HullError> {
+        if vertices.len() < MIN_HULL_VERTICES {
+            return Err(HullError::TooFewVertices);
+        }
+        if vertices.len() > MAX_HULL_VERTICES {
+            return Err(HullError::TooManyVertices {
+                capacity: MAX_HULL_VERTICES,
+            });
+        }
+        if !vertices.iter().flatten().all(|c| c.is_finite()) {
+            return Err(HullError::NotFinite);
+        }
+        if !vertices
+            .iter()
+            .flatten()
+            .all(|c| c.abs() <= super::MAX_EXTENT)
+        {
+            return Err(HullError::OutOfRange);
+        }
+        let mut kept = heapless::Vec::new();
+        let (mut low, mut high) = (vec3(vertices[0]), vec3(vertices[0]));
+        let mut sum = Vec3::zeros();
+        for v in vertices {
+            let v = vec3(*v);
+            low = low.inf(&v);
+            high = high.sup(&v);
+            sum += v;
+            let _ = kept.push(v);
+        }
+        let widths = high - low;
+        let half_width = 0.5 * widths.min();
+        if half_width < 0.5 * super::MIN_SEMI_AXIS || !spans_a_volume(&kept, widths.max()) {
+            return Err(HullError::Flat);
+        }
+        Ok(Hull {
+            half_box: low.abs().sup(&high.abs()),
+            mean: sum / kept.len() as f32,
+            vertices: kept,
+            half_width,
+        })
+    }
+
+    /// The vertices, the obstacle's frame.
+    pub fn vertices(&self) -> &[Vec3] {
+        &self.vertices
+    }
+
+    /// Half-extents of the smallest box about the frame's origin holding the
+    /// hull, length units.
+    pub fn half_box(&self) -> Vec3 {
+        self.half_box
+    }
+
+    /// Half the hull's smallest width along its frame's axes, length units:
+    /// the `rho` of its potential (the inradius when the hull is a box).
+    pub fn half_width(&self) -> f32 {
+        self.half_width
+    }
+
+    /// The vertex farthest along `direction` (the hull's support point).
+    #[inline(always)]
+    fn support(&self, direction: &Vec3) -> Vec3 {
+        let mut best = self.vertices[0];
+        let mut best_dot = best.dot(direction);
+        for v in &self.vertices[1..] {
+            let d = v.dot(direction);
+            if d > best_dot {
+                best_dot = d;
+                best = *v;
+            }
+        }
+        best
+    }
+
+    /// The distance from `x` (the obstacle's frame) to the hull, by GJK:
+    /// see the module docs. At most [`MAX_GJK_ITERATIONS`] supports.
+    pub fn distance(&self, x: &Vec3) -> HullDistance {
+        // The simplex holds support points relative to `x` (the Minkowski
+        // difference hull - x), so the closest point to the origin is sought.
+        let mut simplex = Simplex {
+            points: [Vec3::zeros(); 4],
+            count: 1,
+        };
+        // Start from the vertex farthest toward `x` from the mean.
+        let mut v = self.support(&(x - self.mean)) - x;
+        simplex.points[0] = v;
+        let mut lower = 0.0f32;
+        for _ in 0..MAX_GJK_ITERATIONS {
+            let v_sq = v.dot(&v);
+            if v_sq <= 0.0 {
+                break;
+            }
+            let w = self.support(&-v) - x;
+            // Every hull point q has (q - x) . v >= w . v: the plane through
+            // w bounds the distance below by w . v / |v| (when positive).
+            let vw = v.dot(&w);
+            if vw > 0.0 {
+                lower = lower.max(vw / sqrt(v_sq));
+            }
+            // No progress beyond rounding: v is the closest point.
+            if v_sq - vw <= 4.0 * f32::EPSILON * v_sq {
+                break;
+            }
+            if simplex.points[..simplex.count].contains(&w) {
+                break;
+            }
+            simplex.points[simplex.count] = w;
+            simplex.count += 1;
+            match simplex.reduce() {
+                Some(closest) => v = closest,
+                None => {
+                    // The origin is in the tetrahedron: x is inside.
+                    v = Vec3::zeros();
+                    break;
+                }
+            }
+        }
+        let v_sq = v.dot(&v);
+        if v_sq <= 0.0 {
+            return self.inside(x);
+        }
+        let distance = sqrt(v_sq);
+        HullDistance {
+            distance,
+            normal: -v / distance,
+            lower_bound: lower.min(distance),
+        }
+    }
+
+    /// [`Hull::distance`] for a point inside.
+    fn inside(&self, x: &Vec3) -> HullDistance {
+        let out = x - self.mean;
+        let length = sqrt(out.dot(&out));
+        HullDistance {
+            distance: 0.0,
+            normal: if length > 0.0 {
+                out / length
+            } else {
+                Vec3::z()
+            },
+            lower_bound: 0.0,
+        }
+    }
+}
+
+/// Whether the points span a tetrahedron of volume at least
+/// `MIN_RELATIVE_VOLUME spread^3`: the farthest point from the first, the
+/// farthest from their line, the farthest from their plane.
+fn spans_a_volume(points: &[Vec3], spread: f32) -> bool {
+    let a = points[0];
+    let farthest = |score: &dyn Fn(&Vec3) -> f32| {
+        let mut best = (a, 0.0f32);
+        for p in points {
+            let s = score(p);
+            if s > best.1 {
+                best = (*p, s);
+            }
+        }
+        best
+    };
+    let (b, _) = farthest(&|p| (p - a).norm_squared());
+    let ab = b - a;
+    let (c, _) = farthest(&|p| ab.cross(&(p - a)).norm_squared());
+    let normal = ab.cross(&(c - a));
+    let (_, volume) = farthest(&|p| normal.dot(&(p - a)).abs());
+    volume >= 6.0 * MIN_RELATIVE_VOLUME * spread * spread * spread
+}
+
+/// GJK's simplex: 1 to 4 points of the Minkowski difference.
+struct Simplex {
+    points: [Vec3; 4],
+    count: usize,
+}
+
+impl Simplex {
+    /// The point of the simplex closest to the origin; the simplex is
+    /// reduced to the points whose hull holds it. `None` when the origin is
+    /// inside the tetrahedron (the simplex has four points and no face sees
+    /// the origin).
+    fn reduce(&mut self) -> Option<Vec3> {
+        let p = self.points;
+        let (closest, kept) = match self.count {
+            1 => (p[0], Kept::from([0])),
+            2 => segment(p[0], p[1]),
+            3 => triangle(p[0], p[1], p[2]),
+            _ => tetrahedron(p[0], p[1], p[2], p[3])?,
+        };
+        let mut points = [Vec3::zeros(); 4];
+        for (slot, &i) in points.iter_mut().zip(&kept.index[..kept.count]) {
+            *slot = p[i as usize];
+        }
+        self.points = points;
+        self.count = kept.count;
+        Some(closest)
+    }
+}
+
+/// Which of a simplex's points (by index) hold its closest point.
+#[derive(Clone, Copy)]
+struct Kept {
+    index: [u8; 3],
+    count: usize,
+}
+
+impl<const K: usize> From<[u8; K]> for Kept {
+    fn from(ids: [u8; K]) -> Self {
+        let mut index = [0; 3];
+        index[..K].copy_from_slice(&ids);
+        Kept { index, count: K }
+    }
+}
+
+/// The closest point of segment `ab` to the origin.
+fn segment(a: Vec3, b: Vec3) -> (Vec3, Kept) {
+    let ab = b - a;
+    let t = -a.dot(&ab);
+    if t <= 0.0 {
+        return (a, Kept::from([0]));
+    }
+    let length_sq = ab.dot(&ab);
+    if t >= length_sq {
+        return (b, Kept::from([1]));
+    }
+    (a + ab * (t / length_sq), Kept::from([0, 1]))
+}
+
+/// The closest point of triangle `abc` to the origin, by its Voronoi
+/// regions (Ericson 5.1.5). A triangle too thin for its barycentric
+/// denominator falls back to its nearest edge.
+fn triangle(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, Kept) {
+    let (ab, ac) = (b - a, c - a);
+    let d1 = -ab.dot(&a);
+    let d2 = -ac.dot(&a);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, Kept::from([0]));
+    }
+    let d3 = -ab.dot(&b);
+    let d4 = -ac.dot(&b);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, Kept::from([1]));
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let t = d1 / (d1 - d3);
+        return (a + ab * t, Kept::from([0, 1]));
+    }
+    let d5 = -ab.dot(&c);
+    let d6 = -ac.dot(&c);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, Kept::from([2]));
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let t = d2 / (d2 - d6);
+        return (a + ac * t, Kept::from([0, 2]));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + (c - b) * t, Kept::from([1, 2]));
+    }
+    // Inside the face: the origin's projection on its plane, `n (a . n) /
+    // |n|^2`, whose direction is the normal's to rounding (the
+    // barycentric sum `a + v ab + w ac` cancels when the triangle is large
+    // against the distance, and turns the direction).
+    let normal = ab.cross(&ac);
+    let normal_sq = normal.dot(&normal);
+    if !(normal_sq > 0.0 && va + vb + vc > 0.0) {
+        return thin_triangle(a, b, c);
+    }
+    (normal * (a.dot(&normal) / normal_sq), Kept::from([0, 1, 2]))
+}
+
+/// The nearest of a degenerate triangle's edges to the origin.
+#[cold]
+fn thin_triangle(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, Kept) {
+    let mut best = segment(a, b);
+    for (candidate, map) in [(segment(a, c), [0u8, 2]), (segment(b, c), [1, 2])] {
+        if candidate.0.norm_squared() < best.0.norm_squared() {
+            let (point, kept) = candidate;
+            let mut index = [0; 3];
+            for (slot, &i) in index.iter_mut().zip(&kept.index[..kept.count]) {
+                *slot = map[i as usize];
+            }
+            best = (
+                point,
+                Kept {
+                    index,
+                    count: kept.count,
+                },
+            );
+        }
+    }
+    best
+}
+
+/// The closest point of tetrahedron `abcd` to the origin (Ericson 5.1.6):
+/// the nearest of the closest points of the faces the origin is outside
+/// of; `None` when it is outside of none (inside, or on the boundary).
+fn tetrahedron(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Option<(Vec3, Kept)> {
+    let points = [a, b, c, d];
+    // Each face and the vertex opposite it.
+    const FACES: [([u8; 3], u8); 4] = [
+        ([0, 1, 2], 3),
+        ([0, 2, 3], 1),
+        ([0, 3, 1], 2),
+        ([1, 3, 2], 0),
+    ];
+    let mut best: Option<(Vec3, Kept)> = None;
+    let mut best_sq = f32::INFINITY;
+    let mut degenerate = false;
+    for (face, opposite) in FACES {
+        let [i, j, k] = face.map(|i| points[i as usize]);
+        let normal = (j - i).cross(&(k - i));
+        let origin_side = -i.dot(&normal);
+        let opposite_side = (points[opposite as usize] - i).dot(&normal);
+        if opposite_side == 0.0 {
+            degenerate = true;
+        }
+        if origin_side * opposite_side < 0.0 || opposite_side == 0.0 {
+            let (point, kept) = triangle(i, j, k);
+            let sq = point.norm_squared();
+            if sq < best_sq {
+                let mut index = [0; 3];
+                for (slot, &n) in index.iter_mut().zip(&kept.index[..kept.count]) {
+                    *slot = face[n as usize];
+                }
+                best_sq = sq;
+                best = Some((
+                    point,
+                    Kept {
+                        index,
+                        count: kept.count,
+                    },
+                ));
+            }
+        }
+    }
+    // A flat tetrahedron holds no volume for the origin to be in.
+    if degenerate && best.is_none() {
+        return Some(triangle(a, b, c));
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 40) as f32) / (1u64 << 24) as f32
+    }
+
+    /// `count` random points in a box of half-extents `size`, off the origin.
+    fn random_points(state: &mut u64, count: usize, size: [f32; 3]) -> heapless::Vec<[f32; 3], 32> {
+        let mut points = heapless::Vec::new();
+        for _ in 0..count {
+            let p = [0, 1, 2].map(|i| (2.0 * lcg(state) - 1.0) * size[i] + 0.3 * size[i]);
+            let _ = points.push(p);
+        }
+        points
+    }
+
+    /// The closest point of triangle `abc` to `p`, f64, by projection and
+    /// clamping to the edges (an independent method: the plane, then each
+    /// edge and vertex).
+    fn triangle_distance(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+        let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+        let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+        let cross = |x: [f64; 3], y: [f64; 3]| {
+            [
+                x[1] * y[2] - x[2] * y[1],
+                x[2] * y[0] - x[0] * y[2],
+                x[0] * y[1] - x[1] * y[0],
+            ]
+        };
+        let seg = |a: [f64; 3], b: [f64; 3]| {
+            let ab = sub(b, a);
+            let t = (dot(sub(p, a), ab) / dot(ab, ab)).clamp(0.0, 1.0);
+            let q = [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]];
+            dot(sub(p, q), sub(p, q)).sqrt()
+        };
+        let n = cross(sub(b, a), sub(c, a));
+        let nn = dot(n, n);
+        let mut best = seg(a, b).min(seg(b, c)).min(seg(c, a));
+        if nn > 0.0 {
+            let s = dot(sub(p, a), n) / nn;
+            let q = [p[0] - s * n[0], p[1] - s * n[1], p[2] - s * n[2]];
+            let inside = [(a, b), (b, c), (c, a)]
+                .iter()
+                .all(|&(u, v)| dot(cross(sub(v, u), sub(q, u)), n) >= 0.0);
+            if inside {
+                best = best.min(s.abs() * nn.sqrt());
+            }
+        }
+        best
+    }
+
+    /// Distance from `p` to the hull of `points`, f64: the least distance
+    /// to any triangle of three of them (the closest hull point lies on a
+    /// face, which is such a triangle, and every triangle is in the hull).
+    /// Meaningful for `p` outside the hull.
+    fn brute_distance(points: &[[f32; 3]], p: [f64; 3]) -> f64 {
+        let v: Vec<[f64; 3]> = points.iter().map(|q| q.map(f64::from)).collect();
+        let mut best = f64::INFINITY;
+        for i in 0..v.len() {
+            for j in i + 1..v.len() {
+                for k in j + 1..v.len() {
+                    best = best.min(triangle_distance(p, v[i], v[j], v[k]));
+                }
+            }
+        }
+        best
+    }
+
+    /// Whether `p` is in the hull of `points`, f64: in some tetrahedron of
+    /// four of them (Caratheodory).
+    fn brute_inside(points: &[[f32; 3]], p: [f64; 3]) -> bool {
+        let v: Vec<[f64; 3]> = points.iter().map(|q| q.map(f64::from)).collect();
+        let det = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
+            let (x, y, z) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+                [d[0] - a[0], d[1] - a[1], d[2] - a[2]],
+            );
+            x[0] * (y[1] * z[2] - y[2] * z[1]) - x[1] * (y[0] * z[2] - y[2] * z[0])
+                + x[2] * (y[0] * z[1] - y[1] * z[0])
+        };
+        let n = v.len();
+        for i in 0..n {
+            for j in i + 1..n {
+                for k in j + 1..n {
+                    for l in k + 1..n {
+                        let (a, b, c, d) = (v[i], v[j], v[k], v[l]);
+                        let whole = det(a, b, c, d);
+                        if whole.abs() < 1e-12 {
+                            continue;
+                        }
+                        let parts = [
+                            det(p, b, c, d),
+                            det(a, p, c, d),
+                            det(a, b, p, d),
+                            det(a, b, c, p),
+                        ];
+                        if parts.iter().all(|s| s * whole >= 0.0) {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    #[test]
+    fn distances_match_a_brute_force_oracle_on_random_hulls() {
+        let mut state = 7u64;
+        let mut checked = 0;
+        for case in 0..300 {
+            let count = 4 + case % 17;
+            let size = [
+                1.0 + 3.0 * lcg(&mut state),
+                0.5 + 2.0 * lcg(&mut state),
+                1.0 + lcg(&mut state),
+            ];
+            let points = random_points(&mut state, count, size);
+            let Ok(hull) = Hull::new(&points) else {
+                continue;
+            };
+            for _ in 0..10 {
+                let x = [0, 1, 2].map(|i| (2.0 * lcg(&mut state) - 1.0) * 3.0 * size[i]);
+                let p = x.map(f64::from);
+                let got = hull.distance(&vec3(x));
+                if brute_inside(&points, p) {
+                    assert_eq!(got.distance, 0.0, "case {case} x {x:?}: inside");
+                    continue;
+                }
+                let want = brute_distance(&points, p);
+                let scale = 1.0 + want;
+                assert!(
+                    (got.distance as f64 - want).abs() <= 2e-5 * scale,
+                    "case {case} x {x:?}: {} against {want}",
+                    got.distance
+                );
+                assert!(got.lower_bound as f64 <= want + 2e-5 * scale);
+                assert!(
+                    got.lower_bound as f64 >= want - 2e-5 * scale,
+                    "lower {} against {want}: case {case} count {count} x {x:?} points {points:?}",
+                    got.lower_bound
+                );
+                // The normal leads from the closest point to x.
+                let closest = vec3(x) - got.normal * got.distance;
+                assert!((got.normal.norm() - 1.0).abs() < 1e-5);
+                assert!(brute_distance(&points, closest.map(f64::from).into()) < 1e-4 * scale);
+                checked += 1;
+            }
+        }
+        assert!(checked > 1500, "only {checked} outside points");
+    }
+
+    #[test]
+    fn the_normal_is_the_gradient_of_the_distance() {
+        let mut state = 99u64;
+        for _ in 0..100 {
+            let points = random_points(&mut state, 12, [2.0, 1.5, 1.0]);
+            let Ok(hull) = Hull::new(&points) else {
+                continue;
+            };
+            let x = vec3([0, 1, 2].map(|_| (2.0 * lcg(&mut state) - 1.0) * 8.0));
+            let at = hull.distance(&x);
+            if at.distance < 0.1 {
+                continue;
+            }
+            let h = 1e-2;
+            for axis in 0..3 {
+                let mut e = Vec3::zeros();
+                e[axis] = h;
+                let slope = (hull.distance(&(x + e)).distance - hull.distance(&(x - e)).distance)
+                    / (2.0 * h);
+                assert!(
+                    (slope - at.normal[axis]).abs() < 2e-2,
+                    "axis {axis}: {slope} against {}",
+                    at.normal[axis]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_box_hull_measures_as_the_box() {
+        let mut corners = [[0.0f32; 3]; 8];
+        for (i, corner) in corners.iter_mut().enumerate() {
+            for (axis, h) in [1.0, 2.0, 0.5].into_iter().enumerate() {
+                corner[axis] = if i >> axis & 1 == 1 { h } else { -h };
+            }
+        }
+        let hull = Hull::new(&corners).unwrap();
+        assert_eq!(hull.half_box(), Vec3::new(1.0, 2.0, 0.5));
+        assert_eq!(hull.half_width(), 0.5);
+        let face = hull.distance(&Vec3::new(3.0, 0.5, 0.1));
+        assert!((face.distance - 2.0).abs() < 1e-6 && (face.normal - Vec3::x()).norm() < 1e-6);
+        let corner = hull.distance(&Vec3::new(2.0, 3.0, 1.5));
+        assert!((corner.distance - 3.0f32.sqrt()).abs() < 1e-5);
+        let inside = hull.distance(&Vec3::new(0.5, -1.0, 0.2));
+        assert_eq!((inside.distance, inside.lower_bound), (0.0, 0.0));
+    }
+
+    #[test]
+    fn rejects_bad_vertex_sets() {
+        let tetra = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        assert!(Hull::new(&tetra).is_ok());
+        assert_eq!(Hull::new(&tetra[..3]), Err(HullError::TooFewVertices));
+        let flat = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.5, 0.2, 0.0],
+        ];
+        assert_eq!(Hull::new(&flat), Err(HullError::Flat));
+        let line = [
+            [0.0, 0.0, 0.0],
+            [1.0, 1.0, 1.0],
+            [2.0, 2.0, 2.0],
+            [3.0, 3.0, 3.0],
+        ];
+        assert_eq!(Hull::new(&line), Err(HullError::Flat));
+        let mut nan = tetra;
+        nan[2][1] = f32::NAN;
+        assert_eq!(Hull::new(&nan), Err(HullError::NotFinite));
+        let mut far = tetra;
+        far[1][0] = 2.0e4;
+        assert_eq!(Hull::new(&far), Err(HullError::OutOfRange));
+        let many = [[0.0; 3]; 33];
+        assert_eq!(
+            Hull::new(&many),
+            Err(HullError::TooManyVertices { capacity: 32 })
+        );
+    }
+
+    #[test]
+    fn queries_are_bounded_and_finite_on_hard_input() {
+        // Nearly coplanar points, duplicates, and far queries.
+        let points = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 1.0e-2],
+            [1.0, 1.0, 1.0e-2],
+            [0.5, 0.5, -1.0e-2],
+        ];
+        let hull = Hull::new(&points).unwrap();
+        for x in [
+            [0.5, 0.5, 1.0e3],
+            [1.0e4, -1.0e4, 3.0],
+            [0.5, 0.5, 0.0],
+            [0.3, 0.3, 1.0e-7],
+        ] {
+            let d = hull.distance(&vec3(x));
+            assert!(
+                d.distance.is_finite() && d.lower_bound <= d.distance && d.normal.norm() > 0.99
+            );
+        }
+    }
+}
