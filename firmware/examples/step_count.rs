@@ -304,7 +304,11 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
                 &mut hit,
                 |_| {},
                 |h| {
-                    *h = black_box(obstacle.contact(black_box(&point.position), point.kind))
+                    *h = black_box(obstacle.contact(
+                        black_box(&point.position),
+                        point.kind,
+                        &[],
+                    ))
                         .is_some();
                 },
             );
@@ -331,8 +335,19 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
 /// within its influence (each timed over 16 repetitions). One line per
 /// shape, `obstacles` = 1, `what` = `contact_<shape>_<aligned|turned>`.
 fn shape_costs() {
-    use capp_core::obstacle::{Obstacle, PointKind};
+    use capp_core::obstacle::{Hull, Obstacle, PointKind};
     use capp_core::{Shape, Solid};
+    // A 16-vertex hull of the boxes' size: an octagonal prism, its
+    // octagon's corners on the ellipse of semi-axes 20 and 15, z = +-10.
+    let mut prism = [[0.0f32; 3]; 16];
+    for (i, v) in prism.iter_mut().enumerate() {
+        let (s, c) = capp_core::math::sin_cos(core::f32::consts::FRAC_PI_4 * (i % 8) as f32 + 0.3);
+        *v = [20.0 * c, 15.0 * s, if i < 8 { 10.0 } else { -10.0 }];
+    }
+    let Ok(hull) = Hull::new(&prism) else {
+        return;
+    };
+    let hulls = [hull];
     let shapes = [
         (
             "superellipsoid8",
@@ -369,6 +384,7 @@ fn shape_costs() {
                 length: 36.0,
             },
         ),
+        ("hull16", Shape::Convex { hull: 0 }),
     ];
     for (label, shape) in shapes {
         for (turn, euler_123) in [("aligned", [0.0; 3]), ("turned", [0.3, -0.5, 0.9])] {
@@ -377,7 +393,7 @@ fn shape_costs() {
                 euler_123,
                 shape,
             };
-            let Ok(obstacle) = Obstacle::new(0, &solid, [6.0, 3.0], 24.0) else {
+            let Ok(obstacle) = Obstacle::new_in(0, &solid, &hulls, [6.0, 3.0], 24.0) else {
                 continue;
             };
             let (mut total, mut within) = (0u64, 0u64);
@@ -393,7 +409,7 @@ fn shape_costs() {
                     -40.0 + r * ring * s,
                     30.0 + r * z,
                 );
-                if obstacle.contact(&point, PointKind::Link).is_none() {
+                if obstacle.contact(&point, PointKind::Link, &hulls).is_none() {
                     continue;
                 }
                 let mut hit = false;
@@ -402,7 +418,11 @@ fn shape_costs() {
                     &mut hit,
                     |_| {},
                     |h| {
-                        *h = black_box(obstacle.contact(black_box(&point), PointKind::Link))
+                        *h = black_box(obstacle.contact(
+                            black_box(&point),
+                            PointKind::Link,
+                            &hulls,
+                        ))
                             .is_some();
                     },
                 );

@@ -1556,6 +1556,152 @@ mod tests {
         }
     }
 
+    /// A box given as its eight corners, as a hull.
+    fn box_hull(half: [f32; 3]) -> Hull {
+        let mut corners = [[0.0f32; 3]; 8];
+        for (i, corner) in corners.iter_mut().enumerate() {
+            for (axis, h) in half.into_iter().enumerate() {
+                corner[axis] = if i >> axis & 1 == 1 { h } else { -h };
+            }
+        }
+        Hull::new(&corners).unwrap()
+    }
+
+    #[test]
+    fn a_box_hull_is_the_box() {
+        // The same box as a primitive and as a hull of its corners: the
+        // same `rho` (half its smallest width), so outside the box the same
+        // `C`, gradient and distance bound, to rounding, turned or not.
+        let mut rng = 31u64;
+        let half = [1.5, 0.8, 2.0];
+        let hulls = [box_hull(half)];
+        let margins = [0.6, 0.3];
+        for euler_123 in [[0.0; 3], [0.4, -0.7, 1.2]] {
+            let place = |shape| Solid {
+                centre: [1.0, -2.0, 0.5],
+                euler_123,
+                shape,
+            };
+            let cuboid = Obstacle::new(
+                0,
+                &place(Shape::Cuboid { half_extents: half }),
+                margins,
+                4.0,
+            )
+            .unwrap();
+            let hull = Obstacle::new_in(0, &place(Shape::Convex { hull: 0 }), &hulls, margins, 4.0)
+                .unwrap();
+            assert_eq!(hull.bounding_radius(), cuboid.bounding_radius());
+            let mut compared = 0;
+            for _ in 0..600 {
+                let p = cuboid.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 6.0;
+                let local = cuboid.rotation().transpose() * (p - cuboid.centre());
+                let (d, _) = distance::signed_distance(
+                    &Primitive::Cuboid {
+                        half_extents: vec3(half),
+                    },
+                    &local,
+                );
+                for kind in [PointKind::Joint, PointKind::Link] {
+                    let (a, b) = (
+                        cuboid.contact(&p, kind, &[]),
+                        hull.contact(&p, kind, &hulls),
+                    );
+                    if d < 1e-3 {
+                        // Inside the box the hull reports distance 0: C below 1.
+                        if let Some(b) = b {
+                            assert!(b.clearance < 0.0);
+                        }
+                        continue;
+                    }
+                    match (a, b) {
+                        (None, None) => {}
+                        (Some(a), Some(b)) => {
+                            let scale = 1.0 + a.clearance.abs();
+                            assert!(
+                                (a.clearance - b.clearance).abs() <= 1e-4 * scale,
+                                "{p:?}: {a:?} {b:?}"
+                            );
+                            assert!(
+                                (a.gradient - b.gradient).norm()
+                                    <= 1e-3 * (1.0 + a.gradient.norm()),
+                                "{p:?}: {a:?} {b:?}"
+                            );
+                            assert!(
+                                (a.distance_sq.sqrt() - b.distance_sq.sqrt()).abs()
+                                    <= 1e-4 * (1.0 + d),
+                                "{p:?}: {a:?} {b:?}"
+                            );
+                            compared += 1;
+                        }
+                        // At the influence boundary one may round out.
+                        (a, b) => assert!(
+                            (d - margins[kind as usize] - 4.0).abs() < 1e-3,
+                            "{p:?} {d}: {a:?} {b:?}"
+                        ),
+                    }
+                }
+            }
+            assert!(compared > 300, "only {compared}");
+        }
+    }
+
+    #[test]
+    fn hull_margins_are_true_distances_and_bounds_are_below_them() {
+        let mut rng = 41u64;
+        let margins = [0.5, 0.25];
+        let mut points = [[0.0f32; 3]; 12];
+        for p in points.iter_mut() {
+            *p = [
+                2.0 * lcg(&mut rng),
+                1.2 * lcg(&mut rng),
+                0.8 * lcg(&mut rng),
+            ];
+        }
+        let hulls = [Hull::new(&points).unwrap()];
+        let solid = Solid {
+            centre: [0.0, 3.0, -1.0],
+            euler_123: [0.2, 0.3, -0.4],
+            shape: Shape::Convex { hull: 0 },
+        };
+        let o = Obstacle::new_in(0, &solid, &hulls, margins, 3.0).unwrap();
+        for _ in 0..800 {
+            let p = o.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 4.0;
+            let local = o.rotation().transpose() * (p - o.centre());
+            let d = hulls[0].distance(&local).distance;
+            for kind in [PointKind::Joint, PointKind::Link] {
+                let m = margins[kind as usize];
+                let Some(c) = o.contact(&p, kind, &hulls) else {
+                    assert!(d - m > 3.0 - 1e-4, "{p:?} dropped at {d}");
+                    continue;
+                };
+                assert_eq!(c.clearance <= 0.0, d <= m, "{p:?} {d} {c:?}");
+                let bound = c.distance_sq.sqrt();
+                assert!(bound <= (d - m).max(0.0) + 1e-5);
+                assert!(bound >= (d - m).max(0.0) - 1e-4 * (1.0 + d));
+                let uncut = o.clearance_uncut(&p, kind, &hulls);
+                assert!((uncut - c.clearance).abs() <= 1e-5 * (1.0 + uncut.abs()));
+            }
+        }
+    }
+
+    #[test]
+    fn a_convex_obstacle_needs_its_hull() {
+        let solid = Solid::aligned([0.0; 3], Shape::Convex { hull: 1 });
+        let hulls = [box_hull([1.0; 3])];
+        assert_eq!(
+            Obstacle::new_in(3, &solid, &hulls, [0.1, 0.1], 1.0).err(),
+            Some(ObstacleError::NoSuchHull { obstacle: 3 })
+        );
+        assert!(Obstacle::new(
+            0,
+            &Solid::aligned([0.0; 3], Shape::Convex { hull: 0 }),
+            [0.1, 0.1],
+            1.0
+        )
+        .is_err());
+    }
+
     #[test]
     fn rejects_bad_primitives() {
         let check = |shape| Obstacle::new(2, &Solid::aligned([0.0; 3], shape), [0.0; 2], 1.0);
