@@ -12,7 +12,7 @@
 use arbitrary::Arbitrary;
 use capp_core::control::LawKind;
 use capp_core::robot::{JointOrigin, Placement};
-use capp_core::{Joint, JointKind, Mission, Robot, Scenario, Settings, Shape, Solid, Waypoint};
+use capp_core::{Joint, JointKind, Scenario, Settings, Shape, Solid, Waypoint};
 use capp_fuzz::plan_a_few_steps;
 use libfuzzer_sys::fuzz_target;
 
@@ -142,6 +142,9 @@ struct Input {
     settings: FuzzSettings,
     /// The end effector's frame in the last joint's.
     tool: Option<FuzzOrigin>,
+    /// Hull vertex lists (convex obstacles name them; any count, any
+    /// vertices: the core refuses what is not a hull).
+    hulls: Vec<Vec<[Num; 3]>>,
 }
 
 /// `R = Rz Ry Rx` rows, from Euler angles.
@@ -232,7 +235,7 @@ fuzz_target!(|input: Input| {
         .take(66)
         .map(|o| {
             let sizes = o.semi_axes.map(|x| x.positive(5.0));
-            let shape = match o.shape % 5 {
+            let shape = match o.shape % 6 {
                 0 => Shape::SuperEllipsoid {
                     semi_axes: sizes,
                     exponents: o.exponents.map(|x| 1.0 + x.positive(11.0)),
@@ -245,10 +248,11 @@ fuzz_target!(|input: Input| {
                     radius: sizes[0],
                     length: sizes[1],
                 },
-                _ => Shape::Cylinder {
+                4 => Shape::Cylinder {
                     radius: sizes[0],
                     length: sizes[1],
                 },
+                _ => Shape::Convex { hull: o.shape / 6 },
             };
             Solid {
                 centre: o.centre.map(|x| x.get(40.0)),
@@ -276,14 +280,28 @@ fuzz_target!(|input: Input| {
         .tool
         .as_ref()
         .map_or(Placement::IDENTITY, FuzzOrigin::placement);
-    let Ok(robot) = Robot::<32>::new_with_tool(&joints, &tool) else {
+    let hulls: Vec<Vec<[f32; 3]>> = input
+        .hulls
+        .iter()
+        .take(10)
+        .map(|h| h.iter().take(40).map(|v| v.map(|x| x.get(8.0))).collect())
+        .collect();
+    let hull_slices: Vec<&[[f32; 3]]> = hulls.iter().map(|h| &h[..]).collect();
+    // In place, as a board builds it (Scenario::init_with_hulls validates
+    // the robot, the hulls, the obstacles and the mission).
+    let mut scenario = Box::new(Scenario::<32, 64, 16>::empty());
+    if scenario
+        .init_with_hulls(
+            &joints,
+            &tool,
+            &obstacles,
+            &hull_slices,
+            &waypoints,
+            settings,
+        )
+        .is_err()
+    {
         return;
-    };
-    let Ok(mission) = Mission::<16>::new(&waypoints, settings) else {
-        return;
-    };
-    let Ok(scenario) = Scenario::<32, 64, 16>::new(robot, &obstacles, &mission) else {
-        return;
-    };
+    }
     plan_a_few_steps(&scenario, &start);
 });

@@ -682,7 +682,7 @@ impl<const TXQ: usize> Node<TXQ> {
                 &d.joints,
                 &d.tool,
                 &d.obstacles,
-                &hulls[..d.hulls.len()],
+                hulls.get(..d.hulls.len()).unwrap_or_default(),
                 &d.waypoints,
                 d.settings.unwrap_or_default(),
             )

@@ -915,3 +915,90 @@ fn a_bad_primitive_is_refused_with_its_index() {
     assert_eq!(got.last(), Some(&Reply::Ack { command: 8 }));
     assert_eq!(node.status().state, State::Running);
 }
+
+#[test]
+fn hulls_are_loaded_checked_and_cleared_with_the_obstacles() {
+    // Protocol 11: a hull is sent by `Hull` and named by a convex obstacle.
+    // A flat hull is refused at `Run` naming the hull; a convex obstacle
+    // naming a hull never sent, naming the obstacle; `Clear(Obstacles)`
+    // empties the hulls too; a good hull plans.
+    let mut node = Node::<2048>::new();
+    let mut uart = FakeUart::new(usize::MAX);
+    load(&mut uart);
+    uart.send(&Command::Clear(Part::Obstacles));
+    let vertices = |z: f32| {
+        capp_proto::HullVertices::from_slice(&[
+            [0.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0],
+            [0.0, 3.0, 0.0],
+            [0.0, 0.0, z],
+        ])
+        .unwrap()
+    };
+    let convex = |hull| -> capp_proto::Obstacle {
+        capp_core::Solid::aligned([400.0; 3], capp_core::Shape::Convex { hull }).into()
+    };
+    let run = Command::Run {
+        every: 1,
+        error_change: None,
+    };
+    uart.send(&Command::Hull {
+        index: 0,
+        vertices: vertices(3.0),
+    });
+    uart.send(&Command::Hull {
+        index: 1,
+        vertices: vertices(0.0),
+    });
+    uart.send(&Command::Obstacle {
+        index: 0,
+        obstacle: convex(0),
+    });
+    uart.send(&run);
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(
+        got.last(),
+        Some(&Reply::Error {
+            command: 8,
+            code: ErrorCode::InvalidHull,
+            index: 1,
+        })
+    );
+    // Out of order: hull 3 while two are loaded.
+    uart.send(&Command::Hull {
+        index: 3,
+        vertices: vertices(3.0),
+    });
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(
+        got.last(),
+        Some(&Reply::Error {
+            command: 15,
+            code: ErrorCode::OutOfOrder,
+            index: 3,
+        })
+    );
+    uart.send(&Command::Clear(Part::Obstacles));
+    uart.send(&Command::Obstacle {
+        index: 0,
+        obstacle: convex(0),
+    });
+    uart.send(&run);
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(
+        got.last(),
+        Some(&Reply::Error {
+            command: 8,
+            code: ErrorCode::InvalidObstacle,
+            index: 0,
+        })
+    );
+    uart.send(&Command::Hull {
+        index: 0,
+        vertices: vertices(3.0),
+    });
+    uart.send(&run);
+    let got = exchange(&mut node, &mut uart);
+    assert_eq!(got.last(), Some(&Reply::Ack { command: 8 }));
+    assert_eq!(node.status().state, State::Running);
+}

@@ -102,6 +102,10 @@ impl From<Joint> for capp_core::Joint {
     }
 }
 
+// The wire's hull limits are the core's.
+const _: () = assert!(crate::MAX_HULLS == capp_core::obstacle::MAX_HULLS);
+const _: () = assert!(crate::MAX_HULL_VERTICES == capp_core::obstacle::MAX_HULL_VERTICES);
+
 impl From<Solid> for Obstacle {
     fn from(s: Solid) -> Self {
         let (semi_axes, exponents, primitive) = match s.shape {

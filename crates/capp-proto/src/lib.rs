@@ -42,10 +42,11 @@ pub const VERSION: u8 = 11;
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
 pub const MAX_OBSTACLES: usize = 64;
-/// Most hulls in a load (since version 11).
-pub const MAX_HULLS: usize = capp_core::obstacle::MAX_HULLS;
-/// Most vertices a hull has (since version 11).
-pub const MAX_HULL_VERTICES: usize = capp_core::obstacle::MAX_HULL_VERTICES;
+/// Most hulls in a load (since version 11; capp-core's `MAX_HULLS`).
+pub const MAX_HULLS: usize = 8;
+/// Most vertices a hull has (since version 11; capp-core's
+/// `MAX_HULL_VERTICES`).
+pub const MAX_HULL_VERTICES: usize = 32;
 /// A hull's vertices, `[x, y, z]` each in its obstacle's frame.
 pub type HullVertices = heapless::Vec<[f32; 3], MAX_HULL_VERTICES>;
 /// Most waypoints a load may hold.

@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 0A 00 01, CRC-32 0x85d16c52 (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 0B 00 01, CRC-32 0x84130665 (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x0a, 0x06, 0x01, 0x52, 0x6c, 0xd1, 0x85, 0x00]
+        &[0x02, 0x0b, 0x06, 0x01, 0x65, 0x06, 0x13, 0x84, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x0a, 0x01, 0x08, 0xb7, 0xe5, 0x16, 0xe5, 0x00]
+        &[0x08, 0x0b, 0x01, 0x08, 0x80, 0x8f, 0xd4, 0xe4, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x0a, 0x02, 0xff, 0x01, 0xff, 0x16, 0xcd, 0x1a, 0xac, 0x00]
+        &[0x0a, 0x0b, 0x02, 0xff, 0x01, 0xff, 0xa6, 0xe4, 0x7a, 0x91, 0x00]
     );
 }
 
@@ -243,6 +243,53 @@ fn every_command_is_pinned() {
             &TWO,
         ]),
     );
+    // A convex obstacle (since version 11): `Some` (1), the variant (4)
+    // and the hull's index.
+    let convex = Obstacle {
+        centre: [0.0; 3],
+        semi_axes: [0.0; 3],
+        exponents: [0.0; 3],
+        euler_123: [0.0; 3],
+        primitive: Some(Primitive::Convex { hull: 3 }),
+    };
+    check(
+        &Command::Obstacle {
+            index: 0,
+            obstacle: convex,
+        },
+        &cat(&[&[0x04, 0x00], &[0; 48], &[0x01, 0x04, 0x03]]),
+    );
+    // A hull (since version 11): the command (15), its index, the vertex
+    // count, then x, y, z of each vertex.
+    let tetrahedron =
+        HullVertices::from_slice(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 0.5]])
+            .unwrap();
+    check(
+        &Command::Hull {
+            index: 1,
+            vertices: tetrahedron,
+        },
+        &cat(&[
+            &[0x0f, 0x01, 0x04],
+            &[0; 12],
+            &ONE,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &TWO,
+            &ZERO,
+            &ZERO,
+            &ZERO,
+            &HALF,
+        ]),
+    );
+    // The largest hull fits a frame.
+    let largest = Command::Hull {
+        index: 7,
+        vertices: HullVertices::from_slice(&[[1.0e4, -1.0e4, 3.5e3]; MAX_HULL_VERTICES]).unwrap(),
+    };
+    let mut frame = [0u8; MAX_FRAME];
+    assert!(encode(&largest, &mut frame).is_ok());
     check(
         &Command::Waypoint {
             index: 1,
@@ -429,7 +476,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x0a, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x0b, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -449,6 +496,7 @@ fn every_reply_is_pinned() {
         ErrorCode::NotRunning,
         ErrorCode::InvalidCapsules,
         ErrorCode::InvalidDrive,
+        ErrorCode::InvalidHull,
     ]
     .into_iter()
     .enumerate()

@@ -7,6 +7,8 @@
 
 use capp_nopanic as _;
 
+use capp_core::obstacle::{MAX_HULLS, MAX_HULL_VERTICES};
+use capp_core::robot::Placement;
 use capp_core::{
     Joint, Mission, Planner, Robot, Scenario, Settings, Solid, SuperEllipsoid, Waypoint,
 };
@@ -45,10 +47,39 @@ fn plan() {
     let Ok(scenario) = Scenario::<N, M, W>::new(robot, obstacles, &mission) else {
         return;
     };
-    let Ok(mut planner) = Planner::new(&scenario, start) else {
+    // In place with hulls, as the board builds it: the hulls' checks and
+    // GJK are linked too.
+    let vertices: [[f32; 3]; MAX_HULL_VERTICES] = black_box([[1.0; 3]; MAX_HULL_VERTICES]);
+    let (h, v) = (black_box(MAX_HULLS), black_box(MAX_HULL_VERTICES));
+    let Some(hull) = vertices.get(..v) else {
         return;
     };
-    while let Ok(report) = planner.step(&scenario) {
+    let hulls: [&[[f32; 3]]; MAX_HULLS] = [hull; MAX_HULLS];
+    let Some(hulls) = hulls.get(..h) else {
+        return;
+    };
+    let mut in_place = Scenario::<N, M, W>::empty();
+    if in_place
+        .init_with_hulls(
+            joints,
+            &Placement::IDENTITY,
+            obstacles,
+            hulls,
+            waypoints,
+            settings,
+        )
+        .is_ok()
+    {
+        run(&in_place, start);
+    }
+    run(&scenario, start);
+}
+
+fn run(scenario: &Scenario<N, M, W>, start: &[f32]) {
+    let Ok(mut planner) = Planner::new(scenario, start) else {
+        return;
+    };
+    while let Ok(report) = planner.step(scenario) {
         black_box(&report);
         black_box(planner.joints());
         if planner.is_done() {

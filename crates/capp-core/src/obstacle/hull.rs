@@ -143,7 +143,8 @@ impl Hull {
             return Err(HullError::OutOfRange);
         }
         let mut kept = heapless::Vec::new();
-        let (mut low, mut high) = (vec3(vertices[0]), vec3(vertices[0]));
+        let first = vec3(vertices.first().copied().unwrap_or_default());
+        let (mut low, mut high) = (first, first);
         let mut sum = Vec3::zeros();
         for v in vertices {
             let v = vec3(*v);
@@ -185,9 +186,12 @@ impl Hull {
     /// The vertex farthest along `direction` (the hull's support point).
     #[inline(always)]
     fn support(&self, direction: &Vec3) -> Vec3 {
-        let mut best = self.vertices[0];
+        let (Some(&first), Some(rest)) = (self.vertices.first(), self.vertices.get(1..)) else {
+            return Vec3::zeros();
+        };
+        let mut best = first;
         let mut best_dot = best.dot(direction);
-        for v in &self.vertices[1..] {
+        for v in rest {
             let d = v.dot(direction);
             if d > best_dot {
                 best_dot = d;
@@ -226,10 +230,13 @@ impl Hull {
             if v_sq - vw <= 4.0 * f32::EPSILON * v_sq {
                 break;
             }
-            if simplex.points[..simplex.count].contains(&w) {
+            if simplex.points.iter().take(simplex.count).any(|p| *p == w) {
                 break;
             }
-            simplex.points[simplex.count] = w;
+            let Some(slot) = simplex.points.get_mut(simplex.count) else {
+                break;
+            };
+            *slot = w;
             simplex.count += 1;
             match simplex.reduce() {
                 Some(closest) => v = closest,
@@ -272,7 +279,9 @@ impl Hull {
 /// `MIN_RELATIVE_VOLUME spread^3`: the farthest point from the first, the
 /// farthest from their line, the farthest from their plane.
 fn spans_a_volume(points: &[Vec3], spread: f32) -> bool {
-    let a = points[0];
+    let Some(&a) = points.first() else {
+        return false;
+    };
     let farthest = |score: &dyn Fn(&Vec3) -> f32| {
         let mut best = (a, 0.0f32);
         for p in points {
@@ -311,8 +320,8 @@ impl Simplex {
             _ => tetrahedron(p[0], p[1], p[2], p[3])?,
         };
         let mut points = [Vec3::zeros(); 4];
-        for (slot, &i) in points.iter_mut().zip(&kept.index[..kept.count]) {
-            *slot = p[i as usize];
+        for (slot, &i) in points.iter_mut().zip(kept.index.iter().take(kept.count)) {
+            *slot = p.get(i as usize).copied().unwrap_or_default();
         }
         self.points = points;
         self.count = kept.count;
@@ -330,8 +339,13 @@ struct Kept {
 impl<const K: usize> From<[u8; K]> for Kept {
     fn from(ids: [u8; K]) -> Self {
         let mut index = [0; 3];
-        index[..K].copy_from_slice(&ids);
-        Kept { index, count: K }
+        for (slot, id) in index.iter_mut().zip(ids) {
+            *slot = id;
+        }
+        Kept {
+            index,
+            count: K.min(3),
+        }
     }
 }
 
@@ -352,6 +366,7 @@ fn segment(a: Vec3, b: Vec3) -> (Vec3, Kept) {
 /// The closest point of triangle `abc` to the origin, by its Voronoi
 /// regions (Ericson 5.1.5). A triangle too thin for its barycentric
 /// denominator falls back to its nearest edge.
+#[inline(never)]
 fn triangle(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, Kept) {
     let (ab, ac) = (b - a, c - a);
     let d1 = -ab.dot(&a);
@@ -399,14 +414,17 @@ fn triangle(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, Kept) {
 /// The nearest of a degenerate triangle's edges to the origin.
 #[cold]
 fn thin_triangle(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, Kept) {
-    let mut best = segment(a, b);
-    for (candidate, map) in [(segment(a, c), [0u8, 2]), (segment(b, c), [1, 2])] {
-        if candidate.0.norm_squared() < best.0.norm_squared() {
-            let (point, kept) = candidate;
+    let mut best = (Vec3::zeros(), Kept::from([0]));
+    let mut best_sq = f32::INFINITY;
+    for (p, q, ends) in [(a, b, [0u8, 1]), (a, c, [0, 2]), (b, c, [1, 2])] {
+        let (point, kept) = segment(p, q);
+        let sq = point.norm_squared();
+        if sq < best_sq {
             let mut index = [0; 3];
-            for (slot, &i) in index.iter_mut().zip(&kept.index[..kept.count]) {
-                *slot = map[i as usize];
+            for (slot, &i) in index.iter_mut().zip(kept.index.iter().take(kept.count)) {
+                *slot = ends.get(i as usize).copied().unwrap_or_default();
             }
+            best_sq = sq;
             best = (
                 point,
                 Kept {
@@ -422,6 +440,7 @@ fn thin_triangle(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, Kept) {
 /// The closest point of tetrahedron `abcd` to the origin (Ericson 5.1.6):
 /// the nearest of the closest points of the faces the origin is outside
 /// of; `None` when it is outside of none (inside, or on the boundary).
+#[inline(never)]
 fn tetrahedron(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Option<(Vec3, Kept)> {
     let points = [a, b, c, d];
     // Each face and the vertex opposite it.
@@ -435,10 +454,11 @@ fn tetrahedron(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Option<(Vec3, Kept)> {
     let mut best_sq = f32::INFINITY;
     let mut degenerate = false;
     for (face, opposite) in FACES {
-        let [i, j, k] = face.map(|i| points[i as usize]);
+        let corner = |n: u8| points.get(n as usize).copied().unwrap_or_default();
+        let [i, j, k] = face.map(corner);
         let normal = (j - i).cross(&(k - i));
         let origin_side = -i.dot(&normal);
-        let opposite_side = (points[opposite as usize] - i).dot(&normal);
+        let opposite_side = (corner(opposite) - i).dot(&normal);
         if opposite_side == 0.0 {
             degenerate = true;
         }
@@ -447,8 +467,8 @@ fn tetrahedron(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Option<(Vec3, Kept)> {
             let sq = point.norm_squared();
             if sq < best_sq {
                 let mut index = [0; 3];
-                for (slot, &n) in index.iter_mut().zip(&kept.index[..kept.count]) {
-                    *slot = face[n as usize];
+                for (slot, &n) in index.iter_mut().zip(kept.index.iter().take(kept.count)) {
+                    *slot = face.get(n as usize).copied().unwrap_or_default();
                 }
                 best_sq = sq;
                 best = Some((
