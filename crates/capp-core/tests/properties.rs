@@ -105,12 +105,13 @@ struct ObstacleSpec {
     exponents: [f32; 3],
     euler_123: [f32; 3],
     /// 0, 1: a super-ellipsoid; 2-5: a sphere, box, capsule, cylinder (sizes
-    /// from `semi_axes`).
+    /// from `semi_axes`); 6: a hull ([`ObstacleSpec::hull`]).
     shape: u8,
 }
 
 impl ObstacleSpec {
-    fn shape(&self) -> Shape {
+    /// The shape; a hull is the scenario's hull number `hull`.
+    fn shape(&self, hull: u8) -> Shape {
         let [a, b, c] = self.semi_axes;
         match self.shape {
             2 => Shape::Sphere { radius: a },
@@ -125,11 +126,35 @@ impl ObstacleSpec {
                 radius: a,
                 length: 2.0 * b,
             },
+            6 => Shape::Convex { hull },
             _ => Shape::SuperEllipsoid {
                 semi_axes: self.semi_axes,
                 exponents: self.exponents,
             },
         }
+    }
+
+    /// A hull's vertices (shape 6): the six points on the axes at the
+    /// semi-axes, a tilted square cap at a fraction of them set by the
+    /// exponents (some inside the octahedron, some out), off-centre.
+    fn hull(&self) -> Vec<[f32; 3]> {
+        let [a, b, c] = self.semi_axes;
+        let [p, q, r] = self.exponents.map(|k| k / 12.0);
+        let mut vertices = vec![
+            [a, 0.0, 0.0],
+            [-a, 0.0, 0.0],
+            [0.0, b, 0.0],
+            [0.0, -b, 0.0],
+            [0.0, 0.0, c],
+            [0.0, 0.0, -c],
+        ];
+        for (sx, sy) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            vertices.push([sx * p * a, sy * q * b, r * c + 0.2 * sx * a]);
+        }
+        for v in &mut vertices {
+            v[0] += 0.25 * a;
+        }
+        vertices
     }
 }
 
@@ -142,7 +167,7 @@ fn obstacle_spec() -> impl Strategy<Value = ObstacleSpec> {
         [0.1f32..3.0, 0.1f32..3.0, 0.1f32..3.0],
         [exponent.clone(), exponent.clone(), exponent],
         [-3.2f32..3.2, -3.2f32..3.2, -3.2f32..3.2],
-        0u8..6,
+        0u8..7,
     )
         .prop_map(
             |(link, along, offset, semi_axes, exponents, euler_123, shape)| ObstacleSpec {
@@ -380,10 +405,15 @@ fn build(joints: &[Joint], case: &Case) -> (Sc, Vec<f32>) {
     let start = config_at(joints, &case.start);
     let goal = config_at(joints, &case.goal);
     let (start_chain, goal_chain) = (fk64(joints, &to64(&start)), fk64(joints, &to64(&goal)));
+    let mut hulls: Vec<Vec<[f32; 3]>> = Vec::new();
     let mut obstacles: Vec<Solid> = case
         .obstacles
         .iter()
         .map(|o| {
+            let hull = hulls.len() as u8;
+            if o.shape == 6 {
+                hulls.push(o.hull());
+            }
             let k = 1 + ((o.link * joints.len() as f32) as usize).min(joints.len() - 1);
             let (a, b) = (start_chain.origins[k], goal_chain.origins[k]);
             let centre = add(
@@ -393,7 +423,7 @@ fn build(joints: &[Joint], case: &Case) -> (Sc, Vec<f32>) {
             Solid {
                 centre: centre.map(|x| x as f32),
                 euler_123: o.euler_123,
-                shape: o.shape(),
+                shape: o.shape(hull),
             }
         })
         .collect();
@@ -409,9 +439,17 @@ fn build(joints: &[Joint], case: &Case) -> (Sc, Vec<f32>) {
     }
     let settings = case.settings.settings();
     loop {
-        let robot = Robot::new(joints).expect("the drawn chain is valid");
-        let mission = Mission::new(&waypoints, settings).expect("two waypoints fit");
-        let sc = Sc::new(robot, &obstacles, &mission).expect("the drawn scenario is valid");
+        let hull_lists: Vec<&[[f32; 3]]> = hulls.iter().map(|h| &h[..]).collect();
+        let mut sc = Sc::empty();
+        sc.init_with_hulls(
+            joints,
+            &capp_core::robot::Placement::IDENTITY,
+            &obstacles,
+            &hull_lists,
+            &waypoints,
+            settings,
+        )
+        .expect("the drawn scenario is valid");
         match Planner::new(&sc, &start) {
             Ok(_) => return (sc, start),
             Err(planner::StartError::InObstacle { obstacle, .. }) => {
@@ -432,6 +470,16 @@ fn check_run(sc: &Sc, start: &[f32]) -> Result<Outcome, TestCaseError> {
     );
     let interior = s.avoidance.points_per_link as usize;
     let obstacles: Vec<Solid> = sc.obstacles().iter().map(|o| *o.source()).collect();
+    let hulls: Vec<Vec<[f64; 3]>> = sc
+        .hulls()
+        .iter()
+        .map(|h| {
+            h.vertices()
+                .iter()
+                .map(|v| [v.x, v.y, v.z].map(f64::from))
+                .collect()
+        })
+        .collect();
     // The planner decides in f32; exact (f64) arithmetic may put a point that
     // f32 saw a hair outside a hair inside. The check allows the f32 rounding
     // of the positions and nothing more: it evaluates obstacles inflated by the
@@ -443,7 +491,7 @@ fn check_run(sc: &Sc, start: &[f32]) -> Result<Outcome, TestCaseError> {
     let slack = ROUNDING * reach;
     let shrunk = (margins.0 - slack, margins.1 - slack);
     let clearance =
-        |q: &[f32]| min_clearance_solids64(&joints, &to64(q), &obstacles, shrunk, interior);
+        |q: &[f32]| min_clearance_solids64(&joints, &to64(q), &obstacles, &hulls, shrunk, interior);
 
     let mut planner = Planner::new(sc, start).expect("build() checked the start");
     if !obstacles.is_empty() {

@@ -183,62 +183,76 @@ impl Hull {
         self.half_width
     }
 
-    /// The vertex farthest along `direction` (the hull's support point).
+    /// The vertex farthest along `direction` (the hull's support point)
+    /// and its index: two vertices a pass, for half the loop's tests.
     #[inline(always)]
-    fn support(&self, direction: &Vec3) -> Vec3 {
-        let (Some(&first), Some(rest)) = (self.vertices.first(), self.vertices.get(1..)) else {
-            return Vec3::zeros();
-        };
-        let mut best = first;
-        let mut best_dot = best.dot(direction);
-        for v in rest {
-            let d = v.dot(direction);
-            if d > best_dot {
-                best_dot = d;
-                best = *v;
+    fn support(&self, direction: &Vec3) -> (u8, Vec3) {
+        let vertices = &self.vertices[..];
+        let dot = |v: &Vec3| v.x * direction.x + v.y * direction.y + v.z * direction.z;
+        let (mut best, mut best_dot) = (0, f32::NEG_INFINITY);
+        let mut pairs = vertices.chunks_exact(2);
+        let mut i = 0;
+        for pair in &mut pairs {
+            if let [a, b] = pair {
+                let (da, db) = (dot(a), dot(b));
+                if da > best_dot {
+                    (best, best_dot) = (i, da);
+                }
+                if db > best_dot {
+                    (best, best_dot) = (i + 1, db);
+                }
+            }
+            i += 2;
+        }
+        if let [c] = pairs.remainder() {
+            if dot(c) > best_dot {
+                best = i;
             }
         }
-        best
+        match vertices.get(best) {
+            Some(v) => (best as u8, *v),
+            None => (0, Vec3::zeros()),
+        }
     }
 
     /// The distance from `x` (the obstacle's frame) to the hull, by GJK:
     /// see the module docs. At most [`MAX_GJK_ITERATIONS`] supports.
     pub fn distance(&self, x: &Vec3) -> HullDistance {
         // The simplex holds support points relative to `x` (the Minkowski
-        // difference hull - x), so the closest point to the origin is sought.
+        // difference hull - x), so the closest point to the origin is
+        // sought, and the vertices they are (to stop when one comes back).
+        // Start from the vertex farthest toward `x` from the mean.
+        let (first, vertex) = self.support(&(x - self.mean));
         let mut simplex = Simplex {
-            points: [Vec3::zeros(); 4],
+            points: [vertex - x, Vec3::zeros(), Vec3::zeros(), Vec3::zeros()],
+            vertices: [first, 0, 0, 0],
             count: 1,
         };
-        // Start from the vertex farthest toward `x` from the mean.
-        let mut v = self.support(&(x - self.mean)) - x;
-        simplex.points[0] = v;
-        let mut lower = 0.0f32;
+        let mut v = simplex.points[0];
+        // The last support's `w . v` and `|v|^2`: every hull point q has
+        // (q - x) . v >= w . v, so w . v / |v| bounds the distance below.
+        let (mut last_vw, mut last_v_sq) = (0.0, 1.0);
         for _ in 0..MAX_GJK_ITERATIONS {
             let v_sq = v.dot(&v);
-            if v_sq <= 0.0 {
+            if !(v_sq > 0.0) {
                 break;
             }
-            let w = self.support(&-v) - x;
-            // Every hull point q has (q - x) . v >= w . v: the plane through
-            // w bounds the distance below by w . v / |v| (when positive).
+            let (id, vertex) = self.support(&-v);
+            let w = vertex - x;
             let vw = v.dot(&w);
-            if vw > 0.0 {
-                lower = lower.max(vw / sqrt(v_sq));
-            }
-            // No progress beyond rounding: v is the closest point.
-            if v_sq - vw <= 4.0 * f32::EPSILON * v_sq {
+            (last_vw, last_v_sq) = (vw, v_sq);
+            // No progress beyond rounding (v is the closest point), or a
+            // vertex the simplex holds came back (rounding would cycle).
+            if v_sq - vw <= 4.0 * f32::EPSILON * v_sq
+                || simplex
+                    .vertices
+                    .iter()
+                    .take(simplex.count)
+                    .any(|&k| k == id)
+            {
                 break;
             }
-            if simplex.points.iter().take(simplex.count).any(|p| *p == w) {
-                break;
-            }
-            let Some(slot) = simplex.points.get_mut(simplex.count) else {
-                break;
-            };
-            *slot = w;
-            simplex.count += 1;
-            match simplex.reduce() {
+            match simplex.add(id, w) {
                 Some(closest) => v = closest,
                 None => {
                     // The origin is in the tetrahedron: x is inside.
@@ -248,14 +262,23 @@ impl Hull {
             }
         }
         let v_sq = v.dot(&v);
-        if v_sq <= 0.0 {
+        if !(v_sq > 0.0) {
             return self.inside(x);
         }
         let distance = sqrt(v_sq);
+        let lower = last_vw / sqrt(last_v_sq);
         HullDistance {
             distance,
             normal: -v / distance,
-            lower_bound: lower.min(distance),
+            lower_bound: if lower > 0.0 {
+                if lower < distance {
+                    lower
+                } else {
+                    distance
+                }
+            } else {
+                0.0
+            },
         }
     }
 
@@ -303,27 +326,42 @@ fn spans_a_volume(points: &[Vec3], spread: f32) -> bool {
 /// GJK's simplex: 1 to 4 points of the Minkowski difference.
 struct Simplex {
     points: [Vec3; 4],
+    /// The hull vertex each point is.
+    vertices: [u8; 4],
     count: usize,
 }
 
 impl Simplex {
-    /// The point of the simplex closest to the origin; the simplex is
-    /// reduced to the points whose hull holds it. `None` when the origin is
-    /// inside the tetrahedron (the simplex has four points and no face sees
-    /// the origin).
-    fn reduce(&mut self) -> Option<Vec3> {
+    /// Adds support point `w` (hull vertex `vertex`) and returns the point
+    /// of the simplex closest to the origin; the simplex is reduced to the
+    /// points whose hull holds it. `None` when the origin is inside the
+    /// tetrahedron (the simplex had four points and no face sees it).
+    fn add(&mut self, vertex: u8, w: Vec3) -> Option<Vec3> {
+        let (Some(slot), Some(id)) = (
+            self.points.get_mut(self.count),
+            self.vertices.get_mut(self.count),
+        ) else {
+            return Some(w);
+        };
+        (*slot, *id) = (w, vertex);
         let p = self.points;
         let (closest, kept) = match self.count {
-            1 => (p[0], Kept::from([0])),
-            2 => segment(p[0], p[1]),
-            3 => triangle(p[0], p[1], p[2]),
+            0 => (p[0], Kept::from([0])),
+            1 => segment(p[0], p[1]),
+            2 => triangle(p[0], p[1], p[2]),
             _ => tetrahedron(p[0], p[1], p[2], p[3])?,
         };
-        let mut points = [Vec3::zeros(); 4];
-        for (slot, &i) in points.iter_mut().zip(kept.index.iter().take(kept.count)) {
-            *slot = p.get(i as usize).copied().unwrap_or_default();
+        let ids = self.vertices;
+        for (n, &i) in kept.index.iter().take(kept.count).enumerate() {
+            if let (Some(slot), Some(id), Some(&point), Some(&vertex)) = (
+                self.points.get_mut(n),
+                self.vertices.get_mut(n),
+                p.get(i as usize),
+                ids.get(i as usize),
+            ) {
+                (*slot, *id) = (point, vertex);
+            }
         }
-        self.points = points;
         self.count = kept.count;
         Some(closest)
     }

@@ -157,7 +157,9 @@ pub fn c64(s: &SuperEllipsoid, margin: f64, p: V3) -> f64 {
 /// rho))^2`, `d` its signed distance (from the closest point of the shape,
 /// computed here by clamping, apart from the core's closed forms) and `rho`
 /// its inradius.
-pub fn solid_c64(s: &capp_core::Solid, margin: f64, p: V3) -> f64 {
+/// A hull's `d` is [`hull_distance64`]'s and its `rho` half its smallest
+/// axis-aligned width, as the core takes them; `hulls` are the scenario's.
+pub fn solid_c64(s: &capp_core::Solid, hulls: &[Vec<V3>], margin: f64, p: V3) -> f64 {
     use capp_core::Shape as S;
     if let Some(se) = s.super_ellipsoid() {
         return c64(&se, margin, p);
@@ -195,9 +197,97 @@ pub fn solid_c64(s: &capp_core::Solid, margin: f64, p: V3) -> f64 {
             let depth = (rho - r).max(x[2].abs() - l);
             (if out > 0.0 { out } else { depth }, r.min(l))
         }
+        S::Convex { hull } => {
+            let vertices = &hulls[hull as usize];
+            let width = (0..3)
+                .map(|i| {
+                    let (lo, hi) = vertices.iter().fold((f64::MAX, f64::MIN), |(lo, hi), v| {
+                        (lo.min(v[i]), hi.max(v[i]))
+                    });
+                    hi - lo
+                })
+                .fold(f64::MAX, f64::min);
+            (hull_distance64(vertices, x), 0.5 * width)
+        }
         S::SuperEllipsoid { .. } => unreachable!("handled above"),
     };
     ((d + rho) / (margin + rho)).powi(2)
+}
+
+/// The distance from `x` to the convex hull of `vertices` (0 inside): the
+/// least distance to a face triangle, a face being any triangle of three
+/// vertices with every vertex on one side of its plane (by brute force, no
+/// code of the core's GJK).
+pub fn hull_distance64(vertices: &[V3], x: V3) -> f64 {
+    let cross = |a: V3, b: V3| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let n = vertices.len();
+    let (mut best, mut inside) = (f64::INFINITY, true);
+    for i in 0..n {
+        for j in i + 1..n {
+            for k in j + 1..n {
+                let (a, b, c) = (vertices[i], vertices[j], vertices[k]);
+                let normal = cross(sub(b, a), sub(c, a));
+                let length = dot(normal, normal).sqrt();
+                if length < 1e-12 {
+                    continue;
+                }
+                let side = |p: V3| dot(normal, sub(p, a)) / length;
+                let sides = vertices.iter().map(|&v| side(v));
+                let (lo, hi) = sides.fold((0.0f64, 0.0f64), |(lo, hi), s| (lo.min(s), hi.max(s)));
+                let tolerance = 1e-9 * (1.0 + dot(a, a).sqrt());
+                if lo < -tolerance && hi > tolerance {
+                    continue; // not a face
+                }
+                // Outward: away from the vertices.
+                let out = if hi > tolerance { -side(x) } else { side(x) };
+                if out > 0.0 {
+                    inside = false;
+                }
+                best = best.min(triangle_distance64(x, a, b, c));
+            }
+        }
+    }
+    if inside {
+        0.0
+    } else {
+        best
+    }
+}
+
+/// The distance from `p` to triangle `abc`: to its plane where the
+/// projection falls inside, else to the nearest edge.
+fn triangle_distance64(p: V3, a: V3, b: V3, c: V3) -> f64 {
+    let seg = |a: V3, b: V3| {
+        let ab = sub(b, a);
+        let t = (dot(sub(p, a), ab) / dot(ab, ab)).clamp(0.0, 1.0);
+        let d = sub(p, add(a, scale(ab, t)));
+        dot(d, d).sqrt()
+    };
+    let cross = |a: V3, b: V3| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let n = cross(sub(b, a), sub(c, a));
+    let nn = dot(n, n);
+    let mut best = seg(a, b).min(seg(b, c)).min(seg(c, a));
+    let s = dot(sub(p, a), n) / nn;
+    let q = sub(p, scale(n, s));
+    if [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|&(u, v)| dot(cross(sub(v, u), sub(q, u)), n) >= 0.0)
+    {
+        best = best.min(s.abs() * nn.sqrt());
+    }
+    best
 }
 
 /// [`min_clearance64`] for obstacles of any shape ([`solid_c64`]).
@@ -205,6 +295,7 @@ pub fn min_clearance_solids64(
     joints: &[Joint],
     q: &[f64],
     obstacles: &[capp_core::Solid],
+    hulls: &[Vec<V3>],
     margins: (f64, f64),
     interior: usize,
 ) -> f64 {
@@ -213,7 +304,7 @@ pub fn min_clearance_solids64(
     for (point, is_joint) in points64(&chain, interior) {
         let margin = if is_joint { margins.0 } else { margins.1 };
         for s in obstacles {
-            m = m.min(solid_c64(s, margin, point) - 1.0);
+            m = m.min(solid_c64(s, hulls, margin, point) - 1.0);
         }
     }
     m
@@ -262,7 +353,7 @@ pub fn min_clearance64(
     interior: usize,
 ) -> f64 {
     let solids: Vec<capp_core::Solid> = obstacles.iter().map(|&s| s.into()).collect();
-    min_clearance_solids64(joints, q, &solids, margins, interior)
+    min_clearance_solids64(joints, q, &solids, &[], margins, interior)
 }
 
 /// A random chain of `n` joints, both kinds, lengths of a few units.
