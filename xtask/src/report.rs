@@ -489,7 +489,7 @@ pub fn tables(
         "### What each obstacle shape costs (M4F, per point / obstacle pair)"
     );
     let _ = writeln!(w);
-    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over 96 points round it within its influence (`step_count`'s `shape_costs`). Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x.");
+    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over 96 points round it within its influence (`step_count`'s `shape_costs`). Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; the hull is an octagonal prism of 16 vertices (semi-axes 20 x 15 in, 20 in tall), measured by GJK (`obstacle/hull.rs`). Targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x, a 16-vertex hull at most 4 x.");
     let _ = writeln!(w);
     let _ = writeln!(
         w,
@@ -509,6 +509,7 @@ pub fn tables(
         ("box", "box"),
         ("capsule", "capsule"),
         ("cylinder", "cylinder"),
+        ("hull16", "convex hull, 16 vertices"),
     ] {
         let (aligned, turned) = (shape(label, "aligned"), shape(label, "turned"));
         let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {

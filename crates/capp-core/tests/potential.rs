@@ -74,7 +74,7 @@ fn potential_gradient_matches_central_differences() {
                 let field = potential_gradient(
                     &robot,
                     &frames,
-                    &validated,
+                    capp_core::World::of(&validated),
                     &settings,
                     &mut mu[..n],
                     &mut distance[..n],
@@ -149,7 +149,7 @@ fn the_nearest_half_space_holds_the_obstacle_under_either_margin() {
             let field = potential_gradient(
                 &robot,
                 &frames,
-                core::slice::from_ref(&obstacle),
+                capp_core::World::of(core::slice::from_ref(&obstacle)),
                 &settings,
                 &mut mu[..n],
                 &mut distance[..n],
