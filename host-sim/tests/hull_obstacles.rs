@@ -465,9 +465,10 @@ fn bad_hulls_are_refused_on_one_line_at_their_obstacle_exit_2_no_output() {
 
 #[test]
 fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
-    // A part from CAD (a binary STL) beside the planar arm's path, and a
-    // wedge given by its vertices: `capp run` reaches the target, the copy
-    // of the scenario loads where it is, and `capp check` accepts the run.
+    // A part from CAD (a binary STL) across the planar arm's way (the
+    // planner escapes round it and passes it at its margin), and a wedge
+    // given by its vertices: `capp run` reaches the target, the copy of the
+    // scenario loads where it is, and `capp check` accepts the run.
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(
         dir.path().join("part.stl"),
@@ -478,7 +479,7 @@ fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
         dir.path(),
         "cell.toml",
         &format!(
-            "{}\n[[obstacles]]\nname = \"part\"\nshape = \"mesh\"\nmesh = \"part.stl\"\ncentre = [0.95, 0.45, 0.0]\neuler = [0.0, 0.0, 20.0]\n\n[[obstacles]]\nname = \"wedge\"\nshape = \"convex\"\ncentre = [-0.2, 0.9, 0.0]\nvertices = [[-0.1, -0.1, -0.2], [0.1, -0.1, -0.2], [0.0, 0.1, -0.2], [-0.1, -0.1, 0.2], [0.1, -0.1, 0.2], [0.0, 0.1, 0.2]]\n",
+            "{}\n[[obstacles]]\nname = \"part\"\nshape = \"mesh\"\nmesh = \"part.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n\n[[obstacles]]\nname = \"wedge\"\nshape = \"convex\"\ncentre = [-0.2, 0.9, 0.0]\nvertices = [[-0.1, -0.1, -0.2], [0.1, -0.1, -0.2], [0.0, 0.1, -0.2], [-0.1, -0.1, 0.2], [0.1, -0.1, 0.2], [0.0, 0.1, 0.2]]\n",
             head()
         ),
     );
@@ -501,6 +502,10 @@ fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
         String::from_utf8_lossy(&o.stderr)
     );
     assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    assert!(
+        stdout.contains("obstacle 1 \"part\"") && !stdout.contains("escapes:           none"),
+        "the part is in the way: {stdout}"
+    );
     let copy = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
     assert!(
         !copy.contains("\"part.stl\""),
