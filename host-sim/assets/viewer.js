@@ -83,19 +83,27 @@
     row.append(swatch, text);
     legend.append(row);
   }
+  // A convex hull instead: its face triangles, flat shaded, and each face's outline.
   RUN.obstacles.forEach((o, i) => {
     const geometry = new THREE.BufferGeometry();
-    geometry.setAttribute('position', new THREE.Float32BufferAttribute(o.xyz, 3));
-    const index = [];
-    for (let a = 0; a < o.lat; a++) {
-      for (let b = 0; b < o.lon; b++) {
-        const p = a * o.lon + b, q = a * o.lon + ((b + 1) % o.lon);
-        index.push(p, p + o.lon, q, q, p + o.lon, q + o.lon);
+    geometry.setAttribute('position', new THREE.Float32BufferAttribute(o.triangles || o.xyz, 3));
+    if (!o.triangles) {
+      const index = [];
+      for (let a = 0; a < o.lat; a++) {
+        for (let b = 0; b < o.lon; b++) {
+          const p = a * o.lon + b, q = a * o.lon + ((b + 1) % o.lon);
+          index.push(p, p + o.lon, q, q, p + o.lon, q + o.lon);
+        }
       }
+      geometry.setIndex(index);
     }
-    geometry.setIndex(index);
     geometry.computeVertexNormals();
     const colour = colours[i % colours.length];
+    (o.outlines || []).forEach((loop) => {
+      const edge = new THREE.BufferGeometry();
+      edge.setAttribute('position', new THREE.Float32BufferAttribute(loop, 3));
+      scene.add(new THREE.Line(edge, new THREE.LineBasicMaterial({ color: colour })));
+    });
     geometry.computeBoundingSphere();
     // See-through; the more so for walls and floors larger than the scene.
     const opacity = geometry.boundingSphere.radius > side ? 0.22 : 0.45;

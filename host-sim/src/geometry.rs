@@ -16,7 +16,12 @@
 //! ```
 //!
 //! with the margin `m` of the point's kind (joint origins: `joint_margin`;
-//! interior link points: `link_margin`). Avoidance points are every frame
+//! interior link points: `link_margin`). A primitive or a convex hull is
+//! measured on its exact signed distance `d` (a hull's by its enumerated
+//! faces, [`crate::polytope::Polytope`], not the core's GJK) as
+//! `C = ((d + rho) / (m + rho))^2`, `rho` its inradius (a hull's: half its
+//! smallest width along its frame's axes), so `C <= 1` exactly when
+//! `d <= m`: margins are true distances. Avoidance points are every frame
 //! origin `o_1..o_n` and `points_per_link` interior points per link.
 //!
 //! Self-collision: link `k` (0-based, DH link `k + 1`) is the capsule of
@@ -63,6 +68,7 @@ use capp_core::robot::Placement;
 use capp_core::self_collision::pairs::PairStatus;
 use capp_core::{Joint, JointKind};
 
+use crate::polytope::Polytope;
 use crate::problem::Problem;
 
 type M4 = [[f64; 4]; 4];
@@ -403,12 +409,37 @@ enum Form {
         shape: capp_core::Shape,
         inradius: f64,
     },
+    /// A convex hull by its exact signed distance ([`Polytope`]) and half
+    /// its smallest width along its frame's axes (the core's `rho`).
+    Hull { polytope: Polytope, half_width: f64 },
 }
 
 impl Shape {
-    fn new(o: &capp_core::Solid) -> Shape {
+    /// Obstacle `o`; `hulls` are the problem's ([`hull_polytopes`]).
+    fn new(o: &capp_core::Solid, hulls: &[Polytope]) -> Shape {
         use capp_core::Shape as S;
         let form = match o.shape {
+            S::Convex { hull } => {
+                // A hull the problem lacks is refused by validation; an empty
+                // one measures nothing (every distance infinite).
+                let polytope = hulls
+                    .get(hull as usize)
+                    .cloned()
+                    .unwrap_or_else(|| Polytope::new(&[]));
+                let half_width = 0.5
+                    * (0..3)
+                        .map(|a| {
+                            let v = polytope.vertices();
+                            let hi = v.iter().map(|p| p[a]).fold(f64::NEG_INFINITY, f64::max);
+                            let lo = v.iter().map(|p| p[a]).fold(f64::INFINITY, f64::min);
+                            hi - lo
+                        })
+                        .fold(f64::INFINITY, f64::min);
+                Form::Hull {
+                    polytope,
+                    half_width,
+                }
+            }
             S::SuperEllipsoid {
                 semi_axes,
                 exponents,
@@ -424,7 +455,7 @@ impl Shape {
                         h.iter().fold(f64::INFINITY, |m, &x| m.min(x as f64))
                     }
                     S::Cylinder { radius, length } => (radius as f64).min(0.5 * length as f64),
-                    S::SuperEllipsoid { .. } => 0.0,
+                    S::SuperEllipsoid { .. } | S::Convex { .. } => 0.0,
                 },
             },
         };
@@ -458,17 +489,35 @@ impl Shape {
                 c - 1.0
             }
             Form::Primitive { shape, inradius } => {
-                let u = (signed_distance(shape, x) + inradius) / (margin + inradius);
+                let u = (signed_distance(shape, &[], x) + inradius) / (margin + inradius);
+                u * u - 1.0
+            }
+            Form::Hull {
+                polytope,
+                half_width,
+            } => {
+                let u = (polytope.signed_distance(x) + half_width) / (margin + half_width);
                 u * u - 1.0
             }
         }
     }
 }
 
-/// The signed distance from the local point `x` to a primitive's surface
-/// (negative inside): outside, the distance to its closest point; inside,
-/// minus the distance to the nearest face.
-pub fn signed_distance(shape: &capp_core::Shape, x: [f64; 3]) -> f64 {
+/// The problem's hulls with their faces enumerated ([`Polytope`]), by index.
+pub fn hull_polytopes(problem: &Problem) -> Vec<Polytope> {
+    problem
+        .hulls
+        .iter()
+        .map(|h| Polytope::new(&h.iter().map(|v| v.map(f64::from)).collect::<Vec<_>>()))
+        .collect()
+}
+
+/// The signed distance from the local point `x` to a primitive's or a
+/// hull's surface (negative inside): outside, the distance to its closest
+/// point; inside, minus the distance to the nearest face. `hulls` are the
+/// problem's ([`hull_polytopes`]), which a `Convex` shape names; NaN for a
+/// super-ellipsoid or a hull not in `hulls`.
+pub fn signed_distance(shape: &capp_core::Shape, hulls: &[Polytope], x: [f64; 3]) -> f64 {
     use capp_core::Shape as S;
     let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     match *shape {
@@ -499,6 +548,9 @@ pub fn signed_distance(shape: &capp_core::Shape, x: [f64; 3]) -> f64 {
                 radial.max(axial)
             }
         }
+        S::Convex { hull } => hulls
+            .get(hull as usize)
+            .map_or(f64::NAN, |p| p.signed_distance(x)),
         S::SuperEllipsoid { .. } => f64::NAN,
     }
 }
@@ -624,7 +676,14 @@ impl Geometry {
         Geometry {
             joints: problem.joints.clone(),
             tool: problem.tool,
-            shapes: problem.obstacles.iter().map(Shape::new).collect(),
+            shapes: {
+                let hulls = hull_polytopes(problem);
+                problem
+                    .obstacles
+                    .iter()
+                    .map(|o| Shape::new(o, &hulls))
+                    .collect()
+            },
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
             links: Links::new(problem),

@@ -19,6 +19,7 @@
 //! | [`output::summary`] | the run summary text (stdout and `summary.txt`) |
 //! | [`trajectory`] | reading a trajectory CSV back |
 //! | [`geometry`] | the independent f64 model of the robot, obstacles and link capsules (own kinematics, own super-ellipsoids, own segment distance), used by [`check`], the summary, [`render`] and the suite |
+//! | [`polytope`] | convex hulls in f64: a mesh's hull (its corners) for `shape = "mesh"`, a hull's faces and exact signed distance for [`geometry`] |
 //! | [`check`] | the independent trajectory checker (limits, rates, kinematics, clearance, self-collision), on [`geometry`] |
 //! | [`drive_check`] | whether a trajectory is motion a joint drive can follow (issue 22): the fixed period, rate, acceleration and jerk from positions, at rest on arrival, braking stops clear; the *drive figures* of [`check`]'s report |
 //! | [`render`] | SVG/PNG pictures with text, the 3-D `viewer.html`, `motion.gif`, report charts |
@@ -38,6 +39,7 @@ pub mod geometry;
 pub mod input;
 pub mod output;
 pub mod plan;
+pub mod polytope;
 pub mod problem;
 pub mod render;
 pub mod robot_report;

@@ -232,6 +232,10 @@ pub struct Problem {
     pub obstacles: Vec<Solid>,
     /// Obstacle names.
     pub obstacle_names: Vec<String>,
+    /// The hulls `Shape::Convex { hull }` obstacles name, by index: each
+    /// one's vertices in its obstacle's frame, length units (at most
+    /// `capp_core::obstacle::MAX_HULLS`, each validated by the core).
+    pub hulls: Vec<Vec<[f32; 3]>>,
     /// Waypoints; the last is the target.
     pub waypoints: Vec<Waypoint>,
     /// Planner settings.
@@ -264,25 +268,37 @@ impl Problem {
 
     /// The validated core scenario.
     pub fn scenario(&self) -> Result<CoreScenario, LoadError> {
-        let robot = self.robot().map_err(|e| {
+        self.robot().map_err(|e| {
             let line = robot_error_joint(&e)
                 .and_then(|j| self.lines.joints.get(j).copied().flatten())
                 .or(self.lines.robot);
             self.error(line, format!("robot: {e}"))
         })?;
-        let mission =
-            Mission::<MAX_WAYPOINTS>::new(&self.waypoints, self.settings).map_err(|e| {
-                self.error(
-                    self.lines.waypoints.last().copied().flatten(),
-                    e.to_string(),
-                )
-            })?;
-        let mut scenario = Scenario::new(robot, &self.obstacles, &mission).map_err(|e| {
+        Mission::<MAX_WAYPOINTS>::new(&self.waypoints, self.settings).map_err(|e| {
+            self.error(
+                self.lines.waypoints.last().copied().flatten(),
+                e.to_string(),
+            )
+        })?;
+        // The robot and the mission were checked above, so the scenario's
+        // own checks report in the same order as `Scenario::new`'s.
+        let hulls: Vec<&[[f32; 3]]> = self.hulls.iter().map(Vec::as_slice).collect();
+        let mut scenario = CoreScenario::empty();
+        let built = scenario.init_with_hulls(
+            &self.joints,
+            &self.tool,
+            &self.obstacles,
+            &hulls,
+            &self.waypoints,
+            self.settings,
+        );
+        built.map_err(|e| {
             let line = match e {
                 ScenarioError::Robot(r) => {
                     robot_error_joint(&r).and_then(|j| self.lines.joints.get(j).copied().flatten())
                 }
                 ScenarioError::Obstacle(o) => obstacle_error_index(&o)
+                    .or_else(|| self.hull_error_obstacle(&o))
                     .and_then(|i| self.lines.obstacles.get(i).copied().flatten()),
                 ScenarioError::Mission(MissionError::BadSetting(_)) => self.lines.settings,
                 ScenarioError::Mission(MissionError::NotARotation { waypoint }) => self
@@ -311,8 +327,13 @@ impl Problem {
                 | ScenarioError::DriveLength => None,
             };
             let mut message = e.to_string();
+            if let ScenarioError::Obstacle(o @ capp_core::ObstacleError::BadHull { why, .. }) = e {
+                if let Some(i) = self.hull_error_obstacle(&o) {
+                    message = format!("obstacle {}: its hull: {why}", i + 1);
+                }
+            }
             if let ScenarioError::Obstacle(o) = e {
-                if let Some(i) = obstacle_error_index(&o) {
+                if let Some(i) = obstacle_error_index(&o).or_else(|| self.hull_error_obstacle(&o)) {
                     if let Some(name) = self.obstacle_names.get(i).filter(|n| !n.is_empty()) {
                         message = format!("{message} (\"{name}\")");
                     }
@@ -518,6 +539,28 @@ impl Problem {
         Ok(())
     }
 
+    /// The obstacle (0-based) whose hull a hull error is about: the first
+    /// convex obstacle naming the bad hull, or for too many hulls the first
+    /// convex obstacle past the capacity.
+    fn hull_error_obstacle(&self, e: &capp_core::ObstacleError) -> Option<usize> {
+        use capp_core::ObstacleError as E;
+        let names = |o: &Solid| match o.shape {
+            capp_core::Shape::Convex { hull } => Some(hull as usize),
+            _ => None,
+        };
+        match *e {
+            E::BadHull { hull, .. } => self
+                .obstacles
+                .iter()
+                .position(|o| names(o) == Some(hull as usize)),
+            E::TooManyHulls { capacity } => self
+                .obstacles
+                .iter()
+                .position(|o| names(o).is_some_and(|h| h >= capacity)),
+            _ => None,
+        }
+    }
+
     /// `joint 3 ("name")` for messages.
     pub fn joint_label(&self, j: usize) -> String {
         match self.joint_names.get(j).filter(|n| !n.is_empty()) {
@@ -587,6 +630,7 @@ fn obstacle_error_index(e: &capp_core::ObstacleError) -> Option<usize> {
         | E::CentreOutOfRange { obstacle }
         | E::ExponentOutOfRange { obstacle }
         | E::SizeOutOfRange { obstacle } => Some(obstacle as usize),
-        E::TooMany { .. } => None,
+        E::NoSuchHull { obstacle } => Some(obstacle as usize),
+        E::TooMany { .. } | E::TooManyHulls { .. } | E::BadHull { .. } => None,
     }
 }

@@ -217,6 +217,7 @@ pub fn plan_on_board<T: Read + Write>(
             host: capp_proto::VERSION,
         });
     }
+    let hulls: Vec<&[[f32; 3]]> = problem.hulls.iter().map(Vec::as_slice).collect();
     link.upload(&Upload {
         // DH rows or general (URDF) joints, and the tool: the board's
         // robot is the host's (`Robot::new_with_tool`) to the bit.
@@ -232,6 +233,7 @@ pub fn plan_on_board<T: Read + Write>(
             scenario.drive_limits()
         },
         obstacles: &problem.obstacles,
+        hulls: &hulls,
         waypoints: &problem.waypoints,
         joint_goals: &problem.joint_goals,
         settings: problem.settings,
@@ -336,7 +338,7 @@ fn derived_row(scenario: &CoreScenario, s: &capp_link::Setpoint, h: f32) -> Row 
     let field = potential_gradient(
         robot,
         &frames,
-        scenario.obstacles(),
+        scenario.world(),
         &settings.avoidance,
         &mut mu[..s.joints.len()],
         &mut distance[..s.joints.len()],

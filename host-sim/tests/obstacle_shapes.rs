@@ -135,11 +135,11 @@ fn the_checker_and_the_core_agree_and_margins_are_distances() {
             let world = [0, 1, 2].map(|i| c[i] + 0.6 * lcg(&mut rng));
             let d = [0, 1, 2].map(|i| world[i] - c[i]);
             let local = [0, 1, 2].map(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2]);
-            let distance = signed_distance(&solid.shape, local);
+            let distance = signed_distance(&solid.shape, &[], local);
             let point = vec3(world.map(|x| x as f32));
             for kind in [PointKind::Joint, PointKind::Link] {
                 let m = margins[kind as usize] as f64;
-                let uncut = core.clearance_uncut(&point, kind) as f64;
+                let uncut = core.clearance_uncut(&point, kind, &[]) as f64;
                 assert_eq!(
                     uncut <= 0.0,
                     distance <= m,
@@ -150,14 +150,14 @@ fn the_checker_and_the_core_agree_and_margins_are_distances() {
                     Shape::Sphere { radius } | Shape::Capsule { radius, .. } => radius as f64,
                     Shape::Cuboid { half_extents } => half_extents[0] as f64,
                     Shape::Cylinder { radius, .. } => radius as f64,
-                    Shape::SuperEllipsoid { .. } => unreachable!(),
+                    Shape::SuperEllipsoid { .. } | Shape::Convex { .. } => unreachable!(),
                 };
                 let expected = ((distance + rho) / (m + rho)).powi(2) - 1.0;
                 assert!(
                     (uncut - expected).abs() <= 1e-4 * (1.0 + expected.abs()),
                     "{solid:?} at {world:?}: {uncut} against {expected}"
                 );
-                if let Some(contact) = core.contact(&point, kind) {
+                if let Some(contact) = core.contact(&point, kind, &[]) {
                     let gap = (distance - m).max(0.0);
                     assert!((contact.distance_sq as f64).sqrt() - gap <= 1e-5);
                 }
@@ -233,7 +233,7 @@ fn pictures_draw_each_primitive_as_it_is() {
         let vertices = primitive_surface(&solid.shape, 24, 48);
         assert_eq!(vertices.len(), 25 * 48);
         for v in &vertices {
-            let d = signed_distance(&solid.shape, *v);
+            let d = signed_distance(&solid.shape, &[], *v);
             assert!(d.abs() < 1e-6, "{:?}: {v:?} at {d}", solid.shape);
         }
         if let Shape::Cuboid { half_extents: h } = solid.shape {

@@ -129,7 +129,7 @@ pub struct Obstacle {
 
 /// An obstacle's shape in its own frame (capp-core's `Shape`, in `f64`;
 /// capsules and cylinders along z).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Form {
     /// Eq. 25.
     SuperEllipsoid {
@@ -162,11 +162,18 @@ pub enum Form {
         /// Length.
         length: f64,
     },
+    /// The convex hull of `vertices` (`shape = "convex"`), each written as
+    /// the `f32` the loader reads: a part from CAD.
+    Convex {
+        /// The hull's corners in the obstacle's frame.
+        vertices: Vec<[f64; 3]>,
+    },
 }
 
 impl Form {
-    /// capp-core's shape (`f32`).
-    pub fn core(&self) -> capp_core::Shape {
+    /// capp-core's shape (`f32`); a convex one names hull `hull` (the
+    /// scenario's hulls are its convex obstacles' in order).
+    pub fn core(&self, hull: u8) -> capp_core::Shape {
         use capp_core::Shape as S;
         let f = |x: f64| x as f32;
         match *self {
@@ -189,6 +196,17 @@ impl Form {
                 radius: f(radius),
                 length: f(length),
             },
+            Form::Convex { .. } => S::Convex { hull },
+        }
+    }
+
+    /// A convex shape's vertices as the loader reads them (`f32`).
+    pub fn hull(&self) -> Option<Vec<[f32; 3]>> {
+        match self {
+            Form::Convex { vertices } => {
+                Some(vertices.iter().map(|v| v.map(|x| x as f32)).collect())
+            }
+            _ => None,
         }
     }
 
@@ -214,6 +232,13 @@ impl Form {
             Form::Cylinder { radius, length } => {
                 let (r, l) = (num(*radius), num(*length));
                 format!("shape = \"cylinder\"\nradius = {r}\nlength = {l}")
+            }
+            Form::Convex { vertices } => {
+                let rows: Vec<String> = vertices.iter().map(|v| list(v)).collect();
+                format!(
+                    "shape = \"convex\"\nvertices = [\n  {},\n]",
+                    rows.join(",\n  ")
+                )
             }
         }
     }

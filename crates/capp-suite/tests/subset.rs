@@ -606,6 +606,7 @@ fn every_case_file_loads_back_to_the_obstacles_it_was_made_of() {
             "{}",
             c.name
         );
+        let mut hulls = 0u8;
         for ((solid, name), o) in problem
             .obstacles
             .iter()
@@ -614,7 +615,11 @@ fn every_case_file_loads_back_to_the_obstacles_it_was_made_of() {
         {
             let what = format!("{} obstacle {name:?}", c.name);
             assert_eq!(name, &o.name, "{what}");
-            assert_eq!(solid.shape, o.shape.core(), "{what}");
+            assert_eq!(solid.shape, o.shape.core(hulls), "{what}");
+            if let Some(vertices) = o.shape.hull() {
+                assert_eq!(problem.hulls[hulls as usize], vertices, "{what}");
+                hulls += 1;
+            }
             for k in 0..3 {
                 assert!(near(solid.centre[k], o.centre[k] as f32), "{what}");
                 assert!(near(solid.euler_123[k], o.euler[k] as f32), "{what}");
@@ -624,12 +629,14 @@ fn every_case_file_loads_back_to_the_obstacles_it_was_made_of() {
 }
 
 /// The CAD cell is made of primitives only, of every kind: boxes (some
-/// turned about z), vertical and horizontal cylinders, capsules, balls.
+/// turned about z), vertical and horizontal cylinders, capsules, balls, and
+/// convex hulls of 8 to 16 corners.
 #[test]
 fn cad_cells_are_primitives_of_every_kind() {
     use capp_core::Shape;
     let cases = families::cases(&family("cad_cell"), SEED, 20).unwrap();
     let (mut turned_boxes, mut upright, mut lying, mut capsules, mut balls) = (0, 0, 0, 0, 0);
+    let mut hulls = 0;
     for c in &cases {
         let problem = case::parse(&c.text, &c.name).unwrap();
         assert!(c.obstacles.len() >= 7, "{}: table, shelf, pipe", c.name);
@@ -648,12 +655,17 @@ fn cad_cells_are_primitives_of_every_kind() {
                 }
                 Shape::Capsule { .. } => capsules += 1,
                 Shape::Sphere { .. } => balls += 1,
+                Shape::Convex { hull } => {
+                    let corners = problem.hulls[hull as usize].len();
+                    assert!((4..=16).contains(&corners), "{}: {corners}", c.name);
+                    hulls += 1;
+                }
             }
         }
     }
     assert!(
-        turned_boxes > 0 && upright >= 20 && lying > 0 && capsules > 0 && balls > 0,
+        turned_boxes > 0 && upright >= 20 && lying > 0 && capsules > 0 && balls > 0 && hulls > 0,
         "{turned_boxes} turned boxes, {upright} upright and {lying} lying cylinders, \
-         {capsules} capsules, {balls} balls"
+         {capsules} capsules, {balls} balls, {hulls} hulls"
     );
 }

@@ -317,6 +317,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         joint_names: Vec::new(),
         obstacles,
         obstacle_names: Vec::new(),
+        hulls: Vec::new(),
         waypoints,
         settings,
         start,

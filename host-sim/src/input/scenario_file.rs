@@ -15,6 +15,7 @@ use std::path::Path;
 
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
+use capp_core::obstacle::{MAX_HULLS, MAX_HULL_VERTICES};
 use capp_core::{
     pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, Shape, Solid, Waypoint,
 };
@@ -204,14 +205,90 @@ struct ObstacleSpec {
     radius: Option<f64>,
     length: Option<f64>,
     half_extents: Option<[f64; 3]>,
+    /// `convex`: the points whose hull the obstacle is (its frame).
+    vertices: Option<Vec<[f64; 3]>>,
+    /// `mesh`: an STL or OBJ file, relative to the scenario file.
+    mesh: Option<String>,
+    /// `mesh`: length units per mesh unit (default 1).
+    scale: Option<f64>,
     #[serde(default)]
     euler: [f64; 3],
+}
+
+/// What an `[[obstacles]]` entry's keys describe.
+enum Given {
+    /// A primitive or a super-ellipsoid.
+    Shape(Shape),
+    /// `shape = "convex"`: the hull of these points (obstacle frame, length units).
+    Vertices(Vec<[f64; 3]>),
+    /// `shape = "mesh"`: the hull of a mesh file's vertices, times `scale`.
+    Mesh {
+        /// The file as written.
+        file: String,
+        /// Length units per mesh unit.
+        scale: f64,
+    },
+}
+
+/// The corners of the hull of `points` (obstacle frame, length units) as
+/// the core takes them, or why not, as a sentence's end.
+fn hull_of(points: &[[f64; 3]]) -> Result<Vec<[f32; 3]>, String> {
+    let corners = crate::polytope::hull_vertices(points).map_err(|e| format!("{e}"))?;
+    if corners.len() > MAX_HULL_VERTICES {
+        return Err(format!(
+            "its hull has {} vertices, more than the {MAX_HULL_VERTICES} a hull may have (split the part into convex pieces or simplify it)",
+            corners.len()
+        ));
+    }
+    Ok(corners.iter().map(|v| v.map(|x| x as f32)).collect())
+}
+
+/// The vertices of mesh file `file` (STL, binary or ASCII, or OBJ), as
+/// written in it; `shown` names it in errors.
+fn mesh_vertices(file: &Path, shown: &str) -> Result<Vec<[f64; 3]>, String> {
+    if !file.is_file() {
+        return Err(format!(
+            "obstacle: mesh \"{shown}\" not found ({})",
+            file.display()
+        ));
+    }
+    let extension = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let loader = mesh_loader::Loader::default().merge_meshes(true);
+    let scene = match extension.as_deref() {
+        Some("stl") => loader.load_stl(file),
+        Some("obj") => loader.load_obj(file),
+        _ => {
+            return Err(format!(
+                "obstacle: mesh \"{shown}\" is neither .stl nor .obj"
+            ))
+        }
+    }
+    .map_err(|e| {
+        let reason = e
+            .to_string()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        format!("obstacle: mesh \"{shown}\" is unreadable: {reason}")
+    })?;
+    let vertices: Vec<[f64; 3]> = scene
+        .meshes
+        .iter()
+        .flat_map(|m| m.vertices.iter().map(|v| v.map(f64::from)))
+        .collect();
+    if vertices.is_empty() {
+        return Err(format!("obstacle: mesh \"{shown}\" has no vertices"));
+    }
+    Ok(vertices)
 }
 
 impl ObstacleSpec {
     /// The shape the keys describe, or why not: each shape takes its own
     /// keys and no other's.
-    fn shape(&self) -> Result<Shape, String> {
+    fn shape(&self) -> Result<Given, String> {
         let kind = self.shape.as_deref().unwrap_or("superellipsoid");
         let given = [
             ("semi_axes", self.semi_axes.is_some()),
@@ -220,20 +297,20 @@ impl ObstacleSpec {
             ("radius", self.radius.is_some()),
             ("length", self.length.is_some()),
             ("half_extents", self.half_extents.is_some()),
+            ("vertices", self.vertices.is_some()),
+            ("mesh", self.mesh.is_some()),
+            ("scale", self.scale.is_some()),
         ];
         let takes: &[&str] = match kind {
             "superellipsoid" => &["semi_axes", "exponents", "exponent"],
             "sphere" => &["radius"],
             "box" => &["half_extents"],
             "capsule" | "cylinder" => &["radius", "length"],
-            "convex" | "mesh" => {
-                return Err(format!(
-                    "obstacle: shape \"{kind}\" is not supported yet (sphere, box, capsule, cylinder and superellipsoid are)"
-                ))
-            }
+            "convex" => &["vertices"],
+            "mesh" => &["mesh", "scale"],
             other => {
                 return Err(format!(
-                    "obstacle: unknown shape \"{other}\" (superellipsoid, sphere, box, capsule, cylinder)"
+                    "obstacle: unknown shape \"{other}\" (superellipsoid, sphere, box, capsule, cylinder, convex, mesh)"
                 ))
             }
         };
@@ -244,7 +321,24 @@ impl ObstacleSpec {
         }
         let missing = |key: &str| format!("obstacle: shape \"{kind}\" needs `{key}`");
         let f = |x: f64| x as f32;
-        Ok(match kind {
+        Ok(Given::Shape(match kind {
+            "convex" => {
+                return Ok(Given::Vertices(
+                    self.vertices.clone().ok_or_else(|| missing("vertices"))?,
+                ))
+            }
+            "mesh" => {
+                let scale = self.scale.unwrap_or(1.0);
+                if !(scale.is_finite() && scale > 0.0) {
+                    return Err(format!(
+                        "obstacle: `scale` must be positive and finite (got {scale})"
+                    ));
+                }
+                return Ok(Given::Mesh {
+                    file: self.mesh.clone().ok_or_else(|| missing("mesh"))?,
+                    scale,
+                });
+            }
             "superellipsoid" => {
                 let semi_axes = self.semi_axes.ok_or_else(|| missing("semi_axes"))?;
                 let exponents = match (self.exponents, self.exponent) {
@@ -285,7 +379,7 @@ impl ObstacleSpec {
                     Shape::Cylinder { radius, length }
                 }
             }
-        })
+        }))
     }
 }
 
@@ -860,10 +954,35 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let mut obstacles = Vec::new();
     let mut obstacle_names = Vec::new();
     let mut obstacle_lines = Vec::new();
+    let mut hulls: Vec<Vec<[f32; 3]>> = Vec::new();
     for spec in file.obstacles {
         let line = at(spec.span());
         let s = spec.into_inner();
-        let shape = s.shape().map_err(|e| err(line, e))?;
+        let points = match s.shape().map_err(|e| err(line, e))? {
+            Given::Shape(shape) => Err(shape),
+            Given::Vertices(v) => Ok(v),
+            Given::Mesh { file, scale } => {
+                let here = path.parent().unwrap_or(Path::new("."));
+                let v = mesh_vertices(&here.join(&file), &file).map_err(|e| err(line, e))?;
+                Ok(v.into_iter().map(|p| p.map(|x| x * scale)).collect())
+            }
+        };
+        let shape = match points {
+            Err(shape) => shape,
+            Ok(points) => {
+                if hulls.len() == MAX_HULLS {
+                    return Err(err(
+                        line,
+                        format!("obstacle: more than {MAX_HULLS} convex or mesh obstacles (each has its own hull, and a scenario holds {MAX_HULLS})"),
+                    ));
+                }
+                let corners = hull_of(&points).map_err(|e| err(line, format!("obstacle: {e}")))?;
+                hulls.push(corners);
+                Shape::Convex {
+                    hull: (hulls.len() - 1) as u8,
+                }
+            }
+        };
         obstacles.push(Solid {
             centre: s.centre.map(|x| x as f32),
             euler_123: s.euler.map(|x| (x * angle) as f32),
@@ -1044,6 +1163,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         joint_names: names,
         obstacles,
         obstacle_names,
+        hulls,
         waypoints,
         settings,
         start,

@@ -145,16 +145,18 @@ pub fn scenario_copy_name(problem: &Problem) -> &'static str {
 }
 
 /// Copies the scenario into an output folder. A TOML scenario's paths
-/// (`[robot] urdf`, `packages`, `package_dirs`, relative to the scenario
-/// file) are made absolute in the copy, comments and all else kept, so that
-/// `capp check` and `capp render` load the copy where it is.
+/// (`[robot] urdf`, `packages`, `package_dirs`, `[[obstacles]] mesh`,
+/// relative to the scenario file) are made absolute in the copy, comments
+/// and all else kept, so that `capp check` and `capp render` load the copy
+/// where it is.
 fn copy_scenario(problem: &Problem, to: &Path) -> Result<()> {
     let source = &problem.source;
     let text =
         fs::read_to_string(source).with_context(|| format!("cannot read {}", source.display()))?;
     let mut text = text;
     let from_urdf = problem.joints.first().is_some_and(|j| j.origin.is_some());
-    if problem.kind == SourceKind::Toml && from_urdf {
+    let has_hulls = !problem.hulls.is_empty();
+    if problem.kind == SourceKind::Toml && (from_urdf || has_hulls) {
         let mut doc: toml_edit::DocumentMut = text
             .parse()
             .with_context(|| format!("cannot re-read {}", source.display()))?;
@@ -184,6 +186,16 @@ fn copy_scenario(problem: &Problem, to: &Path) -> Result<()> {
             }
             if let Some(a) = robot.get_mut("package_dirs").and_then(|v| v.as_array_mut()) {
                 a.iter_mut().for_each(absolute);
+            }
+        }
+        if let Some(list) = doc
+            .get_mut("obstacles")
+            .and_then(|o| o.as_array_of_tables_mut())
+        {
+            for o in list.iter_mut() {
+                if let Some(v) = o.get_mut("mesh").and_then(|v| v.as_value_mut()) {
+                    absolute(v);
+                }
             }
         }
         text = doc.to_string();

@@ -13,7 +13,9 @@
 //! end-effector path; the escape stretches (`escapes`: kind, colour, the step
 //! it started, a phrase, and its stretch of the path); the waypoints (with
 //! their orientation when they have one); and each obstacle's surface as a
-//! `(lat + 1) x lon` grid of world points. The row where each escape started
+//! `(lat + 1) x lon` grid of world points, or for a convex hull its faces
+//! (`triangles`: flat, three world points a triangle; `outlines`: each
+//! face's closed polygon). The row where each escape started
 //! is always among the frames.
 //!
 //! What the drives are asked for: `joint_names`, and per frame each
@@ -46,7 +48,7 @@ use std::fmt::Write as _;
 
 use super::canvas::escape;
 use super::chart::nice_step;
-use super::views::{bounds, escape_color, frames, origins, surface};
+use super::views::{bounds, escape_color, frames, hull_faces, origins, surface};
 use crate::escapes::{classify, side_name, Kind};
 use crate::geometry::{collision_capsules, forward, Geometry};
 use crate::problem::Problem;
@@ -418,11 +420,30 @@ pub fn run_json_with(problem: &Problem, t: &Trajectory, options: ViewerOptions) 
             .filter(|n| !n.is_empty())
             .cloned()
             .unwrap_or_else(|| format!("obstacle {}", o + 1));
+        let sep = if o > 0 { ", " } else { "" };
+        if let Some(faces) = hull_faces(problem, o) {
+            // A hull: its face triangles (fans) with their own corners, so
+            // each face is shaded flat, and each face's outline.
+            let triangles = faces
+                .iter()
+                .flat_map(|f| (1..f.len() - 1).flat_map(move |k| [f[0], f[k], f[k + 1]]));
+            let outlines: Vec<String> = faces
+                .iter()
+                .map(|f| list(f.iter().chain(f.first()).flatten().map(|v| Some(*v))))
+                .collect();
+            let _ = writeln!(
+                s,
+                "{sep}{{\"name\": {}, \"triangles\": {}, \"outlines\": [{}]}}",
+                string(&name),
+                list(triangles.flatten().map(Some)),
+                outlines.join(", "),
+            );
+            continue;
+        }
         let xyz = surface(problem, o, LAT, LON);
         let _ = writeln!(
             s,
-            "{}{{\"name\": {}, \"lat\": {LAT}, \"lon\": {LON}, \"xyz\": {}}}",
-            if o > 0 { ", " } else { "" },
+            "{sep}{{\"name\": {}, \"lat\": {LAT}, \"lon\": {LON}, \"xyz\": {}}}",
             string(&name),
             list(xyz.iter().flatten().map(|v| Some(*v))),
         );

@@ -10,6 +10,7 @@ use super::chart::{diamond, legend_marker, nice_step, tick_label, Marker};
 use super::font;
 use crate::escapes::{Kind, Stretch};
 use crate::geometry::forward;
+use crate::polytope::Polytope;
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -84,22 +85,100 @@ fn rotation(e: [f64; 3]) -> [[f64; 3]; 3] {
 /// Surface samples of obstacle `o` in world coordinates: `lat + 1` rings of
 /// `lon` points from the +z pole to the -z pole (of the obstacle's frame).
 /// A super-ellipsoid is sampled along rays from its centre; a primitive is
-/// drawn as it is ([`primitive_surface`]: flat faces, sharp edges).
+/// drawn as it is ([`primitive_surface`]: flat faces, sharp edges); a
+/// convex hull along rays from its vertices' mean, each corner on the grid
+/// ([`hull_surface`]).
 pub fn surface(problem: &Problem, o: usize, lat: usize, lon: usize) -> Vec<[f64; 3]> {
     let s = &problem.obstacles[o];
-    let r = rotation(s.euler_123.map(f64::from));
-    let c = s.centre.map(f64::from);
     let local = match s.shape {
         capp_core::Shape::SuperEllipsoid {
             semi_axes,
             exponents,
         } => ray_cast(semi_axes.map(f64::from), exponents.map(f64::from), lat, lon),
+        capp_core::Shape::Convex { hull } => match problem.hulls.get(hull as usize) {
+            Some(h) => hull_surface(&hull_polytope(h), lat, lon),
+            None => Vec::new(),
+        },
         shape => primitive_surface(&shape, lat, lon),
     };
+    to_world(s, local)
+}
+
+/// Local points of obstacle `s` in world coordinates.
+fn to_world(s: &capp_core::Solid, local: Vec<[f64; 3]>) -> Vec<[f64; 3]> {
+    let r = rotation(s.euler_123.map(f64::from));
+    let c = s.centre.map(f64::from);
     local
         .into_iter()
         .map(|x| [0, 1, 2].map(|a| c[a] + r[a][0] * x[0] + r[a][1] * x[1] + r[a][2] * x[2]))
         .collect()
+}
+
+/// A hull's vertices (`f32`, its frame) with its faces enumerated.
+fn hull_polytope(vertices: &[[f32; 3]]) -> Polytope {
+    Polytope::new(
+        &vertices
+            .iter()
+            .map(|v| v.map(f64::from))
+            .collect::<Vec<_>>(),
+    )
+}
+
+/// The faces of convex obstacle `o` in world coordinates, each a polygon
+/// (counter-clockwise seen from outside); `None` for other shapes.
+pub fn hull_faces(problem: &Problem, o: usize) -> Option<Vec<Vec<[f64; 3]>>> {
+    let s = &problem.obstacles[o];
+    let capp_core::Shape::Convex { hull } = s.shape else {
+        return None;
+    };
+    let p = hull_polytope(problem.hulls.get(hull as usize)?);
+    Some(
+        p.faces()
+            .iter()
+            .map(|f| to_world(s, f.polygon.iter().map(|&i| p.vertices()[i]).collect()))
+            .collect(),
+    )
+}
+
+/// A hull's surface in its frame as [`surface`]'s grid: along each ray from
+/// the vertices' mean, where it leaves the hull (the nearest face plane
+/// ahead); then each corner replaces the grid point nearest its direction,
+/// so outlines drawn from the samples ([`silhouettes`]) are the hull's own.
+pub fn hull_surface(p: &Polytope, lat: usize, lon: usize) -> Vec<[f64; 3]> {
+    let v = p.vertices();
+    if v.is_empty() {
+        return Vec::new();
+    }
+    let m = [0, 1, 2].map(|a| v.iter().map(|q| q[a]).sum::<f64>() / v.len() as f64);
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let mut rays = Vec::with_capacity((lat + 1) * lon);
+    for i in 0..=lat {
+        let phi = std::f64::consts::PI * i as f64 / lat as f64;
+        for j in 0..lon {
+            let th = std::f64::consts::TAU * j as f64 / lon as f64;
+            rays.push([phi.sin() * th.cos(), phi.sin() * th.sin(), phi.cos()]);
+        }
+    }
+    let mut out: Vec<[f64; 3]> = rays
+        .iter()
+        .map(|&d| {
+            let t = p
+                .faces()
+                .iter()
+                .filter(|f| dot(f.normal, d) > 0.0)
+                .map(|f| (f.offset - dot(f.normal, m)) / dot(f.normal, d))
+                .fold(f64::INFINITY, f64::min);
+            [0, 1, 2].map(|a| m[a] + t * d[a])
+        })
+        .collect();
+    for c in p.corners() {
+        let d = [0, 1, 2].map(|a| v[c][a] - m[a]);
+        let nearest = (0..rays.len())
+            .max_by(|&a, &b| dot(rays[a], d).total_cmp(&dot(rays[b], d)))
+            .unwrap_or(0);
+        out[nearest] = v[c];
+    }
+    out
 }
 
 /// A super-ellipsoid's surface in its frame: along each ray of a latitude
@@ -190,7 +269,8 @@ pub fn primitive_surface(shape: &capp_core::Shape, lat: usize, lon: usize) -> Ve
         }
         S::Cuboid { half_extents } => flat_ended(1.0, half_extents[2] as f64, lat),
         S::Cylinder { radius, length } => flat_ended(radius as f64, 0.5 * length as f64, lat),
-        S::SuperEllipsoid { .. } => Vec::new(),
+        // Not primitives: [`ray_cast`] and [`hull_surface`] draw them.
+        S::SuperEllipsoid { .. } | S::Convex { .. } => Vec::new(),
     };
     rings
         .iter()

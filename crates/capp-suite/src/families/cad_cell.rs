@@ -9,7 +9,7 @@
 //! even cases start at the ready pose when it is clear. Target: position and
 //! orientation of the goal configuration, tolerances 0.005 m and 0.05.
 //!
-//! Scene, all `shape = "box" | "cylinder" | "capsule" | "sphere"`:
+//! Scene, all `shape = "box" | "cylinder" | "capsule" | "sphere" | "convex"`:
 //! - the table top just under the base (a box);
 //! - a shelf unit of true boxes (two side panels, a top, one to three
 //!   boards, sometimes a back panel) at a random azimuth 0.4 to 0.6 m out;
@@ -18,11 +18,12 @@
 //! - often a horizontal pipe (a cylinder along a tangent of the base, 0.25
 //!   to 1 m above the table) on the side away from the shelf;
 //! - on the table: sometimes a box turned about z, sometimes a part (a
-//!   capsule lying on the table, or a ball);
+//!   capsule lying on the table, a ball, or a part from CAD as its mesh's
+//!   convex hull: [`part_hull`]);
 //! - then obstacles in the way of the motion (arm points of the joint-space
 //!   midpoint: a box turned about z, a pipe section vertical or horizontal,
-//!   a capsule or a ball; on the straight end-effector path: a box turned
-//!   about z), each shrunk until start and goal stay clear.
+//!   a capsule, a ball or a mesh hull; on the straight end-effector path: a
+//!   box turned about z), each shrunk until start and goal stay clear.
 
 use std::f64::consts::FRAC_PI_2;
 
@@ -37,7 +38,7 @@ use crate::rng::Rng;
 /// The family.
 pub const FAMILY: Family = Family {
     name: "cad_cell",
-    description: "Franka Emika Panda (URDF) in a cell of CAD primitives: true boxes (shelf, table, parts), cylindrical pipes, capsules, balls; tolerances 0.005 m / 0.05",
+    description: "Franka Emika Panda (URDF) in a cell of CAD primitives: true boxes (shelf, table, parts), cylindrical pipes, capsules, balls, parts as convex mesh hulls; tolerances 0.005 m / 0.05",
     count: 80,
     generate,
 };
@@ -78,6 +79,29 @@ pub fn capsule(
         Obstacle::solid(name, centre, Form::Capsule { radius, length }),
         horizontal,
     )
+}
+
+/// A part from CAD as a mesh's convex hull: 8 to 16 points on the unit
+/// sphere squashed to semi-axes `size` times 0.6 to 1 (each axis), turned
+/// by random 1-2-3 Euler angles, its corners (`f32`, as the loader reads
+/// them, in the loader's order: [`capp_sim::polytope::hull_vertices`]).
+pub fn part_hull(rng: &mut Rng, name: impl Into<String>, centre: [f64; 3], size: f64) -> Obstacle {
+    let axes = [0, 1, 2].map(|_| size * rng.range(0.6, 1.0));
+    let count = 8 + rng.below(9);
+    let points: Vec<[f64; 3]> = (0..count)
+        .map(|_| {
+            let d = [0, 1, 2].map(|_| rng.range(-1.0, 1.0));
+            let length = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).max(1e-3);
+            [0, 1, 2].map(|a| round(axes[a] * d[a] / length))
+        })
+        .collect();
+    let euler = [0, 1, 2].map(|_| rng.range(-3.1, 3.1));
+    // Points on a sphere squashed by at most 0.6 span a volume: the hull
+    // exists; should rounding drop a corner, the loader drops it too.
+    let vertices = capp_sim::polytope::hull_vertices(&points).unwrap_or(points);
+    let mut o = Obstacle::solid(name, centre, Form::Convex { vertices });
+    o.euler = euler;
+    o
 }
 
 /// Turns a shape's z axis to the horizontal direction at `yaw` from x
@@ -180,25 +204,30 @@ fn generate(rng: &mut Rng, index: usize) -> Option<Case> {
             rng.range(-1.5, 1.5) + a,
         ));
     }
-    let part = rng.below(3);
+    let part = rng.below(4);
     if part > 0 {
         let (r, a) = (rng.range(0.3, 0.55), away(rng));
         let (x, y) = (r * libm::cos(a), r * libm::sin(a));
         let radius = rng.range(0.03, 0.07);
-        draft.push(if part == 1 {
-            capsule(
+        draft.push(match part {
+            1 => capsule(
                 "part on the table (capsule)",
                 [x, y, top + radius],
                 radius,
                 rng.range(0.1, 0.25),
                 Some(rng.range(-3.1, 3.1)),
-            )
-        } else {
-            Obstacle::solid(
+            ),
+            2 => Obstacle::solid(
                 "part on the table (ball)",
                 [x, y, top + radius],
                 Form::Sphere { radius },
-            )
+            ),
+            _ => part_hull(
+                rng,
+                "part on the table (mesh hull)",
+                [x, y, top + 1.5 * radius],
+                1.5 * radius,
+            ),
         });
     }
 
@@ -231,8 +260,12 @@ fn in_the_way(draft: &mut Draft, rng: &mut Rng, start: &[f64], goal: &[f64]) -> 
     let any = |rng: &mut Rng, centre: [f64; 3], scale: f64| {
         let label = "in the way (joint-space path)";
         let lying = rng.chance(0.5).then(|| rng.range(-3.1, 3.1));
-        match rng.below(4) {
+        match rng.below(5) {
             0 => boxed(label)(rng, centre, scale),
+            4 => {
+                let size = scale * rng.range(lo, hi);
+                part_hull(rng, "in the way (mesh hull)", centre, size)
+            }
             1 => pipe(
                 label,
                 centre,

@@ -147,10 +147,14 @@ impl Draft {
 
     /// Adds an obstacle.
     pub fn push(&mut self, o: Obstacle) {
+        let hull = self.problem.hulls.len() as u8;
+        if let Some(vertices) = o.shape.hull() {
+            self.problem.hulls.push(vertices);
+        }
         self.problem.obstacles.push(Solid {
             centre: o.centre.map(|x| x as f32),
             euler_123: o.euler.map(|x| x as f32),
-            shape: o.shape.core(),
+            shape: o.shape.core(hull),
         });
         self.problem.obstacle_names.push(o.name.clone());
         self.spec.obstacles.push(o);
@@ -159,7 +163,13 @@ impl Draft {
 
     /// Removes the last obstacle.
     pub fn pop(&mut self) {
-        self.problem.obstacles.pop();
+        if let Some(Solid {
+            shape: capp_core::Shape::Convex { .. },
+            ..
+        }) = self.problem.obstacles.pop()
+        {
+            self.problem.hulls.pop();
+        }
         self.problem.obstacle_names.pop();
         self.spec.obstacles.pop();
         self.geometry = Geometry::new(&self.problem);

@@ -1,0 +1,526 @@
+//! Convex hull obstacles in scenario files (`shape = "convex"` with
+//! `vertices`, `shape = "mesh"` with an STL or OBJ file): each loads as its
+//! hull's corners, the checker's exact f64 distance agrees with the core's
+//! GJK and with `shape = "box"`, every bad hull gets a one-line error naming
+//! the file and the obstacle's line (exit 2, no output folder), and a hull
+//! scenario plans end to end with the checker accepting it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use capp_core::math::vec3;
+use capp_core::obstacle::{Hull, Obstacle, PointKind};
+use capp_core::Shape;
+use capp_sim::geometry::{hull_polytopes, signed_distance};
+use capp_sim::Problem;
+
+mod common;
+
+/// The planar arm with a target, before the obstacles.
+fn head() -> String {
+    format!(
+        "name = \"hulls\"\n{}\n[target]\nposition = [0.4, 0.7, 0.0]\n",
+        common::PLANAR_ARM
+    )
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Loads the head and `obstacles` as `s.toml` in `dir`; the error without
+/// its `file:` prefix (checked to name the file, on one line).
+fn load_in(dir: &Path, obstacles: &str) -> Result<Problem, String> {
+    let path = write(dir, "s.toml", &format!("{}{obstacles}", head()));
+    Problem::load(&path)
+        .and_then(|p| p.validate().map(|_| p))
+        .map_err(|e| {
+            let msg = e.to_string();
+            let prefix = format!("{}:", path.display());
+            assert!(msg.starts_with(&prefix), "names the file: {msg}");
+            assert!(!msg.contains('\n'), "one line: {msg}");
+            msg[prefix.len()..].to_string()
+        })
+}
+
+fn load(obstacles: &str) -> Result<Problem, String> {
+    let dir = tempfile::tempdir().unwrap();
+    load_in(dir.path(), obstacles)
+}
+
+/// A box of half-extents `h` as its 8 corners, TOML.
+fn box_vertices(h: [f64; 3]) -> String {
+    let mut rows = Vec::new();
+    for c in 0..8 {
+        let v = [0, 1, 2].map(|a| if c >> a & 1 == 1 { -h[a] } else { h[a] });
+        rows.push(format!("[{}, {}, {}]", v[0], v[1], v[2]));
+    }
+    format!("[{}]", rows.join(", "))
+}
+
+/// Reproducible uniform numbers in [-1, 1).
+fn lcg(state: &mut u64) -> f64 {
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    ((*state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+}
+
+/// The triangles of a box of half-extents `h` (12, outward).
+fn box_triangles(h: [f32; 3]) -> Vec<[[f32; 3]; 3]> {
+    let corner = |c: usize| [0, 1, 2].map(|a| if c >> a & 1 == 1 { h[a] } else { -h[a] });
+    // Faces as corner indices (bit a set: +h along axis a), counter-clockwise.
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    quads
+        .iter()
+        .flat_map(|q| {
+            [
+                [corner(q[0]), corner(q[1]), corner(q[2])],
+                [corner(q[0]), corner(q[2]), corner(q[3])],
+            ]
+        })
+        .collect()
+}
+
+fn binary_stl(triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
+    let mut b = vec![0u8; 80];
+    b.extend((triangles.len() as u32).to_le_bytes());
+    for t in triangles {
+        b.extend([0u8; 12]);
+        for v in t {
+            for x in v {
+                b.extend(x.to_le_bytes());
+            }
+        }
+        b.extend([0u8; 2]);
+    }
+    b
+}
+
+fn ascii_stl(triangles: &[[[f32; 3]; 3]]) -> String {
+    let mut s = String::from("solid part\n");
+    for t in triangles {
+        s.push_str("facet normal 0 0 0\nouter loop\n");
+        for v in t {
+            s.push_str(&format!("vertex {} {} {}\n", v[0], v[1], v[2]));
+        }
+        s.push_str("endloop\nendfacet\n");
+    }
+    s.push_str("endsolid part\n");
+    s
+}
+
+fn sorted(mut v: Vec<[f32; 3]>) -> Vec<[f32; 3]> {
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    v
+}
+
+fn corners(h: [f32; 3]) -> Vec<[f32; 3]> {
+    sorted(
+        (0..8)
+            .map(|c| [0, 1, 2].map(|a| if c >> a & 1 == 1 { h[a] } else { -h[a] }))
+            .collect(),
+    )
+}
+
+#[test]
+fn convex_vertices_load_as_their_hulls_corners() {
+    // A box's corners, one repeated, plus its centre and a face centre:
+    // only the 8 corners reach the core.
+    let vertices = box_vertices([0.1, 0.2, 0.3]).replace(
+        "]]",
+        "], [0.1, 0.2, 0.3], [0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]",
+    );
+    let p = load(&format!(
+        "\n[[obstacles]]\nname = \"part\"\nshape = \"convex\"\ncentre = [1.0, 0.5, 0.0]\neuler = [0.0, 0.0, 30.0]\nvertices = {vertices}\n"
+    ))
+    .unwrap();
+    assert_eq!(p.obstacles[0].shape, Shape::Convex { hull: 0 });
+    assert!((p.obstacles[0].euler_123[2] - 30f32.to_radians()).abs() < 1e-6);
+    assert_eq!(p.hulls.len(), 1);
+    assert_eq!(sorted(p.hulls[0].clone()), corners([0.1, 0.2, 0.3]));
+    let scenario = p.scenario().unwrap();
+    assert_eq!(scenario.hulls().len(), 1);
+    assert_eq!(scenario.hulls()[0].vertices().len(), 8);
+}
+
+#[test]
+fn meshes_load_as_their_convex_hulls_binary_ascii_stl_and_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let h = [0.1f32, 0.05, 0.2];
+    let triangles = box_triangles(h);
+    std::fs::write(dir.path().join("part.stl"), binary_stl(&triangles)).unwrap();
+    std::fs::create_dir(dir.path().join("cad")).unwrap();
+    // In millimetres, made metres by `scale`.
+    let mm: Vec<[[f32; 3]; 3]> = triangles
+        .iter()
+        .map(|t| t.map(|v| v.map(|x| x * 1000.0)))
+        .collect();
+    write(&dir.path().join("cad"), "part_ascii.stl", &ascii_stl(&mm));
+    // An OBJ: an L-shaped (non-convex) prism, enclosed by its hull.
+    let mut obj = String::new();
+    let l = [
+        [0.0, 0.0],
+        [0.2, 0.0],
+        [0.2, 0.05],
+        [0.05, 0.05],
+        [0.05, 0.2],
+        [0.0, 0.2],
+    ];
+    for z in [-0.05, 0.05] {
+        for [x, y] in l {
+            obj.push_str(&format!("v {x} {y} {z}\n"));
+        }
+    }
+    obj.push_str("f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 6\nf 7 9 8\nf 7 10 9\nf 7 11 10\nf 7 12 11\n");
+    write(dir.path(), "bracket.obj", &obj);
+    let p = load_in(
+        dir.path(),
+        "\n[[obstacles]]\nname = \"binary\"\nshape = \"mesh\"\nmesh = \"part.stl\"\ncentre = [1.0, 0.5, 0.0]\n\n[[obstacles]]\nname = \"ascii\"\nshape = \"mesh\"\nmesh = \"cad/part_ascii.stl\"\nscale = 0.001\ncentre = [-1.0, 0.5, 0.0]\neuler = [10.0, 20.0, 30.0]\n\n[[obstacles]]\nname = \"bracket\"\nshape = \"mesh\"\nmesh = \"bracket.obj\"\ncentre = [0.0, -1.0, 0.0]\n",
+    )
+    .unwrap();
+    assert_eq!(
+        p.obstacles.iter().map(|o| o.shape).collect::<Vec<_>>(),
+        (0..3)
+            .map(|hull| Shape::Convex { hull })
+            .collect::<Vec<_>>()
+    );
+    assert_eq!(sorted(p.hulls[0].clone()), corners(h));
+    let scaled = sorted(p.hulls[1].clone());
+    for (a, b) in scaled.iter().zip(corners(h)) {
+        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6), "{a:?} {b:?}");
+    }
+    // The L's inner corner (0.05, 0.05) is not on its hull: 5 of 6 per end.
+    assert_eq!(p.hulls[2].len(), 10);
+    assert!(!p.hulls[2].iter().any(|v| v[0] == 0.05 && v[1] == 0.05));
+    p.scenario().unwrap();
+}
+
+/// A random convex polytope: `n` points on a squashed sphere.
+fn random_hull(rng: &mut u64, n: usize) -> Vec<[f64; 3]> {
+    let axes = [0.3, 0.15, 0.1];
+    let points: Vec<[f64; 3]> = (0..n)
+        .map(|_| {
+            let d = [0, 1, 2].map(|_| lcg(rng));
+            let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            [0, 1, 2].map(|a| (axes[a] * d[a] / l) as f32 as f64)
+        })
+        .collect();
+    capp_sim::polytope::hull_vertices(&points).unwrap()
+}
+
+#[test]
+fn the_checkers_hull_distance_agrees_with_the_cores_gjk() {
+    let mut rng = 5u64;
+    for _ in 0..10 {
+        let vertices = random_hull(&mut rng, 24);
+        let f32s: Vec<[f32; 3]> = vertices.iter().map(|v| v.map(|x| x as f32)).collect();
+        let core = Hull::new(&f32s).unwrap();
+        let checker = capp_sim::polytope::Polytope::new(&vertices);
+        for _ in 0..1000 {
+            let x = [0, 1, 2].map(|_| 0.6 * lcg(&mut rng));
+            let mine = checker.signed_distance(x);
+            let theirs = core.distance(&vec3(x.map(|c| c as f32)));
+            if mine <= 0.0 {
+                assert_eq!(theirs.distance, 0.0, "{x:?} inside at {mine}");
+            } else {
+                let d = theirs.distance as f64;
+                assert!(
+                    (d - mine).abs() <= 1e-4 * mine + 1e-6,
+                    "{x:?}: checker {mine}, core {d}"
+                );
+                assert!(theirs.lower_bound as f64 <= mine + 1e-6);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_box_as_eight_vertices_is_the_box() {
+    // The same crate as `shape = "box"` and as a hull of its corners, turned
+    // about every axis: the same checker distance, and the same core
+    // clearance to f32 rounding, at random points in and around it.
+    let p = load(&format!(
+        "\n[[obstacles]]\nshape = \"box\"\ncentre = [1.0, 0.5, 0.2]\neuler = [20.0, -35.0, 50.0]\nhalf_extents = [0.1, 0.2, 0.3]\n\n[[obstacles]]\nshape = \"convex\"\ncentre = [1.0, 0.5, 0.2]\neuler = [20.0, -35.0, 50.0]\nvertices = {}\n",
+        box_vertices([0.1, 0.2, 0.3])
+    ))
+    .unwrap();
+    let hulls = hull_polytopes(&p);
+    let scenario = p.scenario().unwrap();
+    let world = scenario.world();
+    let margins = [0.06f32, 0.03];
+    let core: Vec<Obstacle> = (0..2)
+        .map(|i| {
+            Obstacle::new_in(i as u8, &p.obstacles[i], scenario.hulls(), margins, 0.5).unwrap()
+        })
+        .collect();
+    let c = p.obstacles[0].centre.map(f64::from);
+    let r = capp_sim::geometry::rotation(p.obstacles[0].euler_123.map(f64::from));
+    let mut rng = 11u64;
+    for _ in 0..3000 {
+        let world_point = [0, 1, 2].map(|i| c[i] + 0.5 * lcg(&mut rng));
+        let d = [0, 1, 2].map(|i| world_point[i] - c[i]);
+        let local = [0, 1, 2].map(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2]);
+        let as_box = signed_distance(&p.obstacles[0].shape, &hulls, local);
+        let as_hull = signed_distance(&p.obstacles[1].shape, &hulls, local);
+        assert!(
+            (as_box - as_hull).abs() < 1e-6,
+            "{local:?}: {as_box} vs {as_hull}"
+        );
+        let point = vec3(world_point.map(|x| x as f32));
+        for kind in [PointKind::Joint, PointKind::Link] {
+            let m = margins[kind as usize] as f64;
+            let [b, h] = [0, 1].map(|i| core[i].clearance_uncut(&point, kind, world.hulls) as f64);
+            // rho: the box's inradius, the hull's half smallest width: 0.1
+            // both. Inside, the core's hull distance is 0 (GJK gives no depth).
+            if as_hull > 0.0 {
+                assert!(
+                    (b - h).abs() <= 1e-4 * (1.0 + b.abs()),
+                    "{local:?}: {b} vs {h}"
+                );
+            } else {
+                assert!(b <= 0.0 && h <= 0.0, "{local:?}: {b} and {h} inside");
+            }
+            assert_eq!(h <= 0.0, as_hull <= m, "{local:?}: {as_hull} at {h}");
+        }
+    }
+}
+
+#[test]
+fn pictures_draw_a_hull_through_its_corners_on_its_surface() {
+    use capp_sim::render::views::{hull_faces, surface};
+    let p = load(&format!(
+        "\n[[obstacles]]\nshape = \"convex\"\ncentre = [1.0, 0.5, 0.2]\neuler = [0.0, 0.0, 90.0]\nvertices = {}\n",
+        box_vertices([0.1, 0.2, 0.3])
+    ))
+    .unwrap();
+    let hulls = hull_polytopes(&p);
+    let c = p.obstacles[0].centre.map(f64::from);
+    let r = capp_sim::geometry::rotation(p.obstacles[0].euler_123.map(f64::from));
+    let local = |w: [f64; 3]| {
+        let d = [0, 1, 2].map(|i| w[i] - c[i]);
+        [0, 1, 2].map(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2])
+    };
+    let xyz = surface(&p, 0, 24, 48);
+    assert_eq!(xyz.len(), 25 * 48);
+    for w in &xyz {
+        let d = signed_distance(&p.obstacles[0].shape, &hulls, local(*w));
+        assert!(d.abs() < 1e-9, "{w:?} at {d}");
+    }
+    // Every corner is drawn (the outlines are the box's own).
+    for corner in corners([0.1, 0.2, 0.3]) {
+        let corner = corner.map(f64::from);
+        assert!(
+            xyz.iter()
+                .any(|w| (0..3).all(|a| (local(*w)[a] - corner[a]).abs() < 1e-6)),
+            "{corner:?}"
+        );
+    }
+    // The viewer's faces: six rectangles.
+    let faces = hull_faces(&p, 0).unwrap();
+    assert_eq!(faces.len(), 6);
+    assert!(faces.iter().all(|f| f.len() == 4));
+}
+
+fn capp() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_capp"))
+}
+
+#[test]
+fn bad_hulls_are_refused_on_one_line_at_their_obstacle_exit_2_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    // 40 points on a circle's two rings: a hull of 40 corners.
+    let ring: Vec<String> = (0..40)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 20.0;
+            let z = if k < 20 { -0.1 } else { 0.1 };
+            format!("[{}, {}, {z}]", 0.1 * a.cos(), 0.1 * a.sin())
+        })
+        .collect();
+    std::fs::write(dir.path().join("empty.obj"), "# nothing\n").unwrap();
+    std::fs::write(dir.path().join("broken.stl"), [1u8, 2, 3]).unwrap();
+    std::fs::write(dir.path().join("part.ply"), "ply\n").unwrap();
+    let nine: String = (0..9)
+        .map(|k| {
+            format!(
+                "\n[[obstacles]]\nshape = \"convex\"\ncentre = [{}, 1.5, 0.0]\nvertices = {}\n",
+                k as f64 * 0.5 - 2.0,
+                box_vertices([0.1, 0.1, 0.1])
+            )
+        })
+        .collect();
+    let one = |keys: &str| {
+        format!("\n[[obstacles]]\nname = \"part\"\ncentre = [1.0, 0.5, 0.0]\n{keys}\n")
+    };
+    let table = head().lines().count() + 2;
+    let cases: Vec<(String, usize, &str)> = vec![
+        (
+            one("shape = \"convex\"\nvertices = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.1, 0.1, 0.0]]"),
+            table,
+            "obstacle: its vertices span no volume (fewer than 4 that are not coplanar)",
+        ),
+        (
+            one("shape = \"convex\"\nvertices = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]]"),
+            table,
+            "span no volume",
+        ),
+        (
+            one(&format!("shape = \"convex\"\nvertices = [{}]", ring.join(", "))),
+            table,
+            "obstacle: its hull has 40 vertices, more than the 32 a hull may have",
+        ),
+        (
+            one("shape = \"mesh\"\nmesh = \"missing.stl\""),
+            table,
+            "obstacle: mesh \"missing.stl\" not found",
+        ),
+        (
+            one("shape = \"mesh\"\nmesh = \"empty.obj\""),
+            table,
+            "obstacle: mesh \"empty.obj\" has no vertices",
+        ),
+        (
+            one("shape = \"mesh\"\nmesh = \"broken.stl\""),
+            table,
+            "obstacle: mesh \"broken.stl\" is unreadable",
+        ),
+        (
+            one("shape = \"mesh\"\nmesh = \"part.ply\""),
+            table,
+            "obstacle: mesh \"part.ply\" is neither .stl nor .obj",
+        ),
+        (
+            one("shape = \"mesh\""),
+            table,
+            "obstacle: shape \"mesh\" needs `mesh`",
+        ),
+        (
+            one("shape = \"mesh\"\nmesh = \"part.stl\"\nscale = -1.0"),
+            table,
+            "obstacle: `scale` must be positive and finite",
+        ),
+        (
+            nine,
+            table + 8 * 5,
+            "obstacle: more than 8 convex or mesh obstacles",
+        ),
+        (
+            one(&format!("shape = \"convex\"\nradius = 0.1\nvertices = {}", box_vertices([0.1; 3]))),
+            table,
+            "`radius` is not a key of shape \"convex\"",
+        ),
+        (
+            one("shape = \"box\"\nhalf_extents = [0.1, 0.1, 0.1]\nmesh = \"part.stl\""),
+            table,
+            "`mesh` is not a key of shape \"box\"",
+        ),
+        (
+            one("shape = \"sphere\"\nradius = 0.1\nvertices = [[0.0, 0.0, 0.0]]"),
+            table,
+            "`vertices` is not a key of shape \"sphere\"",
+        ),
+        (
+            one(&format!("shape = \"convex\"\nvertices = {}\nfaces = [1, 2, 3]", box_vertices([0.1; 3]))),
+            table + 5,
+            "unknown field `faces`",
+        ),
+        (
+            // Thinner than the core's smallest size: its own refusal.
+            one(&format!("shape = \"convex\"\nvertices = {}", box_vertices([0.1, 0.1, 1e-7]))),
+            table,
+            "obstacle 1: its hull: the vertices are coplanar",
+        ),
+    ];
+    for (i, (obstacles, line, needle)) in cases.iter().enumerate() {
+        let msg = load_in(dir.path(), obstacles).expect_err(needle);
+        assert!(
+            msg.starts_with(&format!("{line}: ")),
+            "{needle}: at line {line}? {msg}"
+        );
+        assert!(msg.contains(needle), "{msg} lacks {needle}");
+        // The binary: exit 2, the same one line, no output folder.
+        let path = write(dir.path(), "bad.toml", &format!("{}{obstacles}", head()));
+        let out = dir.path().join(format!("out{i}"));
+        let o = capp()
+            .args(["run", path.to_str().unwrap(), "-o", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{needle}");
+        let stderr = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(needle), "{stderr}");
+        assert!(!stderr.contains("panicked"));
+        assert!(!out.exists(), "{needle}: no output folder");
+    }
+}
+
+#[test]
+fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
+    // A part from CAD (a binary STL) across the planar arm's way (the
+    // planner escapes round it and passes it at its margin), and a wedge
+    // given by its vertices: `capp run` reaches the target, the copy of the
+    // scenario loads where it is, and `capp check` accepts the run.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("part.stl"),
+        binary_stl(&box_triangles([0.08, 0.08, 0.2])),
+    )
+    .unwrap();
+    let path = write(
+        dir.path(),
+        "cell.toml",
+        &format!(
+            "{}\n[[obstacles]]\nname = \"part\"\nshape = \"mesh\"\nmesh = \"part.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n\n[[obstacles]]\nname = \"wedge\"\nshape = \"convex\"\ncentre = [-0.2, 0.9, 0.0]\nvertices = [[-0.1, -0.1, -0.2], [0.1, -0.1, -0.2], [0.0, 0.1, -0.2], [-0.1, -0.1, 0.2], [0.1, -0.1, 0.2], [0.0, 0.1, 0.2]]\n",
+            head()
+        ),
+    );
+    let out = dir.path().join("run");
+    let o = capp()
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--render",
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    assert!(
+        stdout.contains("obstacle 1 \"part\"") && !stdout.contains("escapes:           none"),
+        "the part is in the way: {stdout}"
+    );
+    let copy = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    assert!(
+        !copy.contains("\"part.stl\""),
+        "the mesh path made absolute: {copy}"
+    );
+    let viewer = std::fs::read_to_string(out.join("viewer.html")).unwrap();
+    assert!(
+        viewer.contains("\"triangles\""),
+        "the hulls drawn by their faces"
+    );
+    let o = capp()
+        .args(["check", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{report}");
+    assert!(report.contains("ACCEPTED"), "{report}");
+}
