@@ -82,7 +82,7 @@ fn listing_differences_match_the_exact_products() {
     capp_core::avoidance::potential_gradient(
         scenario.robot(),
         frames,
-        scenario.obstacles(),
+        scenario.world(),
         &scenario.settings().avoidance,
         &mut mu,
         &mut distance,

@@ -112,6 +112,7 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
         capsule_rows: &[],
         drive: &[],
         obstacles: &[],
+        hulls: &[],
         waypoints: &waypoints,
         joint_goals: &[],
         settings: Settings::default(),

@@ -335,6 +335,10 @@ pub enum Part {
 
 /// Host to board. Each is answered by exactly one reply: [`Reply::Pong`] for
 /// `Ping`, [`Reply::Status`] for `Status`, otherwise [`Reply::Ack`] or [`Reply::Error`].
+// `Hull` (388 bytes of vertices) sizes the enum: without allocation there
+// is no box to put it in, and a command is decoded into one value on the
+// serving loop's stack, counted in the board's painted stack peak.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Command {

@@ -30,8 +30,8 @@
 //! `alloc` shapes (`ConvexPolyhedron` holds `Vec`s) and are written for its
 //! own f32 rounding, so a board's answer and the host's would not be tied
 //! to one implementation; this one is 200 lines and its cost is in
-//! BENCHMARKS.md. The host's checker measures hulls with `parry3d-f64`
-//! independently.
+//! BENCHMARKS.md. The host's checker measures hulls independently, by
+//! their enumerated faces in f64 (`host-sim/src/polytope.rs`).
 
 use crate::math::{sqrt, vec3, Vec3};
 
@@ -217,6 +217,8 @@ impl Hull {
 
     /// The distance from `x` (the obstacle's frame) to the hull, by GJK:
     /// see the module docs. At most [`MAX_GJK_ITERATIONS`] supports.
+    // `!(v_sq > 0.0)`: NaN (a point not finite) ends the search too.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn distance(&self, x: &Vec3) -> HullDistance {
         // The simplex holds support points relative to `x` (the Minkowski
         // difference hull - x), so the closest point to the origin is
