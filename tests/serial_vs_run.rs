@@ -119,6 +119,18 @@ fn the_cad_bay_planned_on_the_board_is_the_host_plan() {
     assert!(n > 20, "{n} setpoints");
 }
 
+/// A part from a mesh file (issue 24): the host makes the STL's convex hull,
+/// protocol 11's `Hull` carries its corners, the board measures it by its
+/// own GJK, and its plan round the bracket is the host's to the bit.
+#[test]
+fn a_mesh_part_planned_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("pips_payload_bay_mesh.toml", &elf);
+    assert!(n > 20, "{n} setpoints");
+}
+
 #[test]
 fn the_listings_input_dat_planned_on_the_board_is_the_host_plan() {
     let Some(elf) = capp_system_tests::firmware_or_skip() else {

@@ -102,6 +102,27 @@ fn pips_payload_bay_cad_reaches_among_true_boxes_and_a_true_cylinder() {
 }
 
 #[test]
+fn pips_payload_bay_mesh_reaches_past_a_bracket_from_an_stl() {
+    use capp_core::Shape;
+    let (problem, t) = runs_and_checks("pips_payload_bay_mesh.toml", Outcome::Reached);
+    // The bracket is the hull of the STL's L: ten corners (the L's inner
+    // corner, on neither end, is inside), and the arm comes within its
+    // influence.
+    let bracket = problem.obstacles.len() - 1;
+    assert_eq!(problem.obstacles[bracket].shape, Shape::Convex { hull: 0 });
+    assert_eq!(problem.hulls.len(), 1);
+    assert_eq!(problem.hulls[0].len(), 10, "{:?}", problem.hulls[0]);
+    let (_, without) = plan("pips_payload_bay_cad.toml");
+    let (_, with) = plan("pips_payload_bay_mesh.toml");
+    assert_ne!(
+        with.rows.len(),
+        without.rows.len(),
+        "the bracket changed nothing"
+    );
+    assert!(!t.rows.is_empty());
+}
+
+#[test]
 fn pips_dead_end_stalls() {
     runs_and_checks("pips_dead_end.toml", Outcome::Stalled);
 }
