@@ -304,11 +304,7 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
                 &mut hit,
                 |_| {},
                 |h| {
-                    *h = black_box(obstacle.contact(
-                        black_box(&point.position),
-                        point.kind,
-                        &[],
-                    ))
+                    *h = black_box(obstacle.contact(black_box(&point.position), point.kind, &[]))
                         .is_some();
                 },
             );
@@ -418,12 +414,9 @@ fn shape_costs() {
                     &mut hit,
                     |_| {},
                     |h| {
-                        *h = black_box(obstacle.contact(
-                            black_box(&point),
-                            PointKind::Link,
-                            &hulls,
-                        ))
-                            .is_some();
+                        *h =
+                            black_box(obstacle.contact(black_box(&point), PointKind::Link, &hulls))
+                                .is_some();
                     },
                 );
                 within += 1;

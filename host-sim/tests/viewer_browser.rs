@@ -196,6 +196,40 @@ fn viewer_draws_in_a_real_browser() {
     assert!(orange > 200, "{orange} pixels of links");
 }
 
+/// A convex hull (the bracket of `pips_payload_bay_mesh.toml`, from an STL)
+/// is drawn by the page's own code in a real browser: the page's self-check
+/// passes with the hull's faces in it, and the legend names the bracket.
+#[test]
+fn viewer_draws_a_mesh_hull_in_a_real_browser() {
+    let Some(exe) = chromium_or_skip("viewer_draws_a_mesh_hull_in_a_real_browser") else {
+        return;
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_payload_bay_mesh.toml");
+    let problem = Problem::load(&path).unwrap();
+    let scenario = problem.validate().unwrap();
+    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
+    let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
+    let t = trajectory::parse(&text, Path::new("trajectory.csv")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("viewer.html");
+    let html = viewer(&problem, &t);
+    assert!(html.contains("bracket"), "the bracket is not in the page");
+    std::fs::write(&page, &html).unwrap();
+    let out = browse(&exe, &page, &["--dump-dom".to_string()]);
+    let dom = &out.stdout;
+    let title = dom
+        .split("<title>")
+        .nth(1)
+        .and_then(|s| s.split("</title>").next())
+        .unwrap_or("(no title)");
+    assert!(
+        title.starts_with("ok "),
+        "the page did not report success ({title}); browser stderr:\n{}",
+        out.stderr
+    );
+    assert!(dom.contains("bracket"), "the legend does not name the bracket");
+}
+
 /// The side panel says which escape the step is in: the planar arm of
 /// `tests/escapes.rs` detours round a low wall it is trapped behind
 /// (`common::planar_trap`), and the page opened at a frame of the detour
