@@ -227,7 +227,10 @@ fn viewer_draws_a_mesh_hull_in_a_real_browser() {
         "the page did not report success ({title}); browser stderr:\n{}",
         out.stderr
     );
-    assert!(dom.contains("bracket"), "the legend does not name the bracket");
+    assert!(
+        dom.contains("bracket"),
+        "the legend does not name the bracket"
+    );
 }
 
 /// The side panel says which escape the step is in: the planar arm of
