@@ -454,7 +454,13 @@ impl Spec {
 
 /// Parses scenario text as `capp run` would read `<name>.toml`.
 pub fn parse(text: &str, name: &str) -> Result<Problem, LoadError> {
-    scenario_file::parse(text, Path::new(&format!("{name}.toml")))
+    parse_at(text, Path::new(&format!("{name}.toml")))
+}
+
+/// Parses scenario text as `capp run` would read the file at `path`: its
+/// relative paths (a `mesh`, a URDF) from the file's folder.
+pub fn parse_at(text: &str, path: &Path) -> Result<Problem, LoadError> {
+    scenario_file::parse(text, path)
 }
 
 /// A generated case.

@@ -240,8 +240,8 @@ pub fn main(args: &[String], root: &Path) -> Result<()> {
         let text = std::fs::read_to_string(&path)
             .with_context(|| format!("reading {}", path.display()))?;
         for &v in &variants {
-            let run = runner::measure_variant(&text, name.trim_end_matches(".toml"), v);
-            let time_step = crate::case::parse(&with_settings(&text, v.settings), name)
+            let run = runner::measure_file(&text, &path, v);
+            let time_step = crate::case::parse_at(&with_settings(&text, v.settings), &path)
                 .map_or(f32::NAN, |p| p.settings.time_step_s);
             shipped.push(ShippedRun {
                 scenario: name.to_string(),

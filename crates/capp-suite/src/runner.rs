@@ -39,7 +39,11 @@ pub struct CaseResult {
 
 /// Reads `text` as `name.toml` and plans it.
 pub fn plan_text(text: &str, name: &str) -> Result<(Problem, RunResult), String> {
-    let problem = case::parse(text, name).map_err(|e| e.to_string())?;
+    plan_problem(case::parse(text, name).map_err(|e| e.to_string())?)
+}
+
+/// Plans a problem as `capp run` would.
+fn plan_problem(problem: Problem) -> Result<(Problem, RunResult), String> {
     let scenario = problem.validate().map_err(|e| e.to_string())?;
     let result = plan::run(&problem, &scenario, |_| {}).map_err(|e| e.to_string())?;
     Ok((problem, result))
@@ -51,6 +55,20 @@ pub fn measure_variant(text: &str, name: &str, variant: Variant) -> VariantRun {
     VariantRun {
         variant,
         metrics: plan_text(&text, name)
+            .map(|(problem, result)| metrics::measure(&problem, &result)),
+    }
+}
+
+/// Plans the text of the scenario file at `path` (its relative paths, a
+/// `mesh` or a URDF, from the file's folder) with `variant` and measures
+/// the run: the shipped scenarios.
+pub fn measure_file(text: &str, path: &std::path::Path, variant: Variant) -> VariantRun {
+    let text = with_settings(text, variant.settings);
+    VariantRun {
+        variant,
+        metrics: case::parse_at(&text, path)
+            .map_err(|e| e.to_string())
+            .and_then(plan_problem)
             .map(|(problem, result)| metrics::measure(&problem, &result)),
     }
 }

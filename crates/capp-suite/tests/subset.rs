@@ -669,3 +669,24 @@ fn cad_cells_are_primitives_of_every_kind() {
          {capsules} capsules, {balls} balls, {hulls} hulls"
     );
 }
+
+/// The report's shipped scenarios are planned from their files, so a
+/// scenario's relative paths (the mesh bay's STL) resolve from its folder:
+/// each one plans with the default law (none refused), and the two CAD bays
+/// reach their targets.
+#[test]
+fn the_shipped_scenarios_plan_from_their_files() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../host-sim/scenarios");
+    let damped = variants().into_iter().find(|v| v.name == "damped").unwrap();
+    for name in capp_suite::cli::SHIPPED {
+        let path = root.join(name);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let run = runner::measure_file(&text, &path, damped);
+        let metrics = run
+            .metrics
+            .unwrap_or_else(|e| panic!("{name} refused: {e}"));
+        if name.starts_with("pips_payload_bay_") {
+            assert_eq!(metrics.outcome, Outcome::Reached, "{name}");
+        }
+    }
+}
