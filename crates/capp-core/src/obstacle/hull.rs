@@ -109,7 +109,7 @@ pub struct Hull {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HullDistance {
     /// `|x - v|`, `v` the closest hull point found: an upper bound on the
-    /// distance, exact at convergence; 0 inside.
+    /// distance, exact at convergence; 0 inside; NaN for a point not finite.
     pub distance: f32,
     /// The unit outward normal `(x - v) / |x - v|`, the gradient of the
     /// distance (inside: away from the vertices' mean).
@@ -264,6 +264,15 @@ impl Hull {
             }
         }
         let v_sq = v.dot(&v);
+        if v_sq.is_nan() {
+            // A point not finite: no distance (the pair code drops it, as it
+            // drops such a point for every shape).
+            return HullDistance {
+                distance: f32::NAN,
+                normal: Vec3::zeros(),
+                lower_bound: f32::NAN,
+            };
+        }
         if !(v_sq > 0.0) {
             return self.inside(x);
         }
@@ -784,6 +793,8 @@ mod tests {
             [0.5, 0.5, -1.0e-2],
         ];
         let hull = Hull::new(&points).unwrap();
+        let nan = hull.distance(&Vec3::new(f32::NAN, 0.0, 1.0));
+        assert!(nan.distance.is_nan() && nan.lower_bound.is_nan());
         for x in [
             [0.5, 0.5, 1.0e3],
             [1.0e4, -1.0e4, 3.0],

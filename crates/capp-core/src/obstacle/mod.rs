@@ -1689,6 +1689,22 @@ mod tests {
     }
 
     #[test]
+    fn a_point_not_finite_is_out_of_a_hulls_influence() {
+        let hulls = [box_hull([1.0; 3])];
+        let o = Obstacle::new_in(
+            0,
+            &Solid::aligned([0.0; 3], Shape::Convex { hull: 0 }),
+            &hulls,
+            [0.1, 0.1],
+            1.0,
+        )
+        .unwrap();
+        for p in [[f32::NAN, 0.0, 0.0], [0.5, f32::NAN, 0.2]] {
+            assert_eq!(o.contact(&vec3(p), PointKind::Joint, &hulls), None, "{p:?}");
+        }
+    }
+
+    #[test]
     fn a_convex_obstacle_needs_its_hull() {
         let solid = Solid::aligned([0.0; 3], Shape::Convex { hull: 1 });
         let hulls = [box_hull([1.0; 3])];
