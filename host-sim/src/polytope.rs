@@ -41,6 +41,8 @@
 
 use std::collections::HashMap;
 
+use crate::geometry::{cross, dot, sub};
+
 /// A point or vector, length units.
 pub type V3 = [f64; 3];
 
@@ -48,22 +50,6 @@ pub type V3 = [f64; 3];
 const HULL_TOLERANCE: f64 = 1e-7;
 /// On-plane tolerance of [`Polytope::new`], relative to the hull's size.
 const FACE_TOLERANCE: f64 = 1e-9;
-
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 fn norm(a: V3) -> f64 {
     dot(a, a).sqrt()

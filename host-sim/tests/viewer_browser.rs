@@ -117,13 +117,12 @@ fn browse_url(exe: &Path, url: &str, extra: &[String]) -> Output {
     }
 }
 
-#[test]
-fn viewer_draws_in_a_real_browser() {
-    let Some(exe) = chromium_or_skip("viewer_draws_in_a_real_browser") else {
-        return;
-    };
-
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml");
+/// A shipped scenario planned and its `viewer.html` written in a temporary
+/// folder: the folder, the page's path and its text.
+fn planned_page(scenario: &str) -> (tempfile::TempDir, PathBuf, String) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(scenario);
     let problem = Problem::load(&path).unwrap();
     let scenario = problem.validate().unwrap();
     let result = plan::run(&problem, &scenario, |_| {}).unwrap();
@@ -133,6 +132,24 @@ fn viewer_draws_in_a_real_browser() {
     let page = dir.path().join("viewer.html");
     let html = viewer(&problem, &t);
     std::fs::write(&page, &html).unwrap();
+    (dir, page, html)
+}
+
+/// The page's `<title>`: its self-check (`ok N frames`, or the error).
+fn page_title(dom: &str) -> &str {
+    dom.split("<title>")
+        .nth(1)
+        .and_then(|s| s.split("</title>").next())
+        .unwrap_or("(no title)")
+}
+
+#[test]
+fn viewer_draws_in_a_real_browser() {
+    let Some(exe) = chromium_or_skip("viewer_draws_in_a_real_browser") else {
+        return;
+    };
+
+    let (dir, page, html) = planned_page("planar_arm.toml");
     let frames: usize = html
         .split("\"frames\": ")
         .nth(1)
@@ -143,12 +160,7 @@ fn viewer_draws_in_a_real_browser() {
 
     // The page's self-check, in its title.
     let out = browse(&exe, &page, &["--dump-dom".to_string()]);
-    let dom = &out.stdout;
-    let title = dom
-        .split("<title>")
-        .nth(1)
-        .and_then(|s| s.split("</title>").next())
-        .unwrap_or("(no title)");
+    let title = page_title(&out.stdout);
     assert_eq!(
         title,
         format!("ok {frames} frames"),
@@ -204,24 +216,11 @@ fn viewer_draws_a_mesh_hull_in_a_real_browser() {
     let Some(exe) = chromium_or_skip("viewer_draws_a_mesh_hull_in_a_real_browser") else {
         return;
     };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_payload_bay_mesh.toml");
-    let problem = Problem::load(&path).unwrap();
-    let scenario = problem.validate().unwrap();
-    let result = plan::run(&problem, &scenario, |_| {}).unwrap();
-    let text = rows_csv(problem.joints.len(), &result.rows).unwrap();
-    let t = trajectory::parse(&text, Path::new("trajectory.csv")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let page = dir.path().join("viewer.html");
-    let html = viewer(&problem, &t);
+    let (_dir, page, html) = planned_page("pips_payload_bay_mesh.toml");
     assert!(html.contains("bracket"), "the bracket is not in the page");
-    std::fs::write(&page, &html).unwrap();
     let out = browse(&exe, &page, &["--dump-dom".to_string()]);
     let dom = &out.stdout;
-    let title = dom
-        .split("<title>")
-        .nth(1)
-        .and_then(|s| s.split("</title>").next())
-        .unwrap_or("(no title)");
+    let title = page_title(dom);
     assert!(
         title.starts_with("ok "),
         "the page did not report success ({title}); browser stderr:\n{}",
