@@ -68,7 +68,7 @@ use capp_core::robot::Placement;
 use capp_core::self_collision::pairs::PairStatus;
 use capp_core::{Joint, JointKind};
 
-use crate::polytope::Polytope;
+use crate::polytope::{cross, dot, sub, Polytope, V3};
 use crate::problem::Problem;
 
 type M4 = [[f64; 4]; 4];
@@ -285,24 +285,6 @@ pub fn rotation(e: [f64; 3]) -> [[f64; 3]; 3] {
         [cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
         [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
         [-sy, cy * sx, cy * cx],
-    ]
-}
-
-type V3 = [f64; 3];
-
-pub(crate) fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
     ]
 }
 

@@ -41,8 +41,6 @@
 
 use std::collections::HashMap;
 
-use crate::geometry::{cross, dot, sub};
-
 /// A point or vector, length units.
 pub type V3 = [f64; 3];
 
@@ -50,6 +48,25 @@ pub type V3 = [f64; 3];
 const HULL_TOLERANCE: f64 = 1e-7;
 /// On-plane tolerance of [`Polytope::new`], relative to the hull's size.
 const FACE_TOLERANCE: f64 = 1e-9;
+
+/// `a - b`.
+pub(crate) fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `a . b`.
+pub(crate) fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `a x b`.
+pub(crate) fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
 
 fn norm(a: V3) -> f64 {
     dot(a, a).sqrt()

@@ -2,7 +2,6 @@
 //! and the problem, and never a panic or a partial output folder.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use capp_sim::Problem;
 
@@ -257,9 +256,7 @@ fn legacy_not_a_rotation() {
     );
 }
 
-fn capp() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_capp"))
-}
+use common::capp;
 
 #[test]
 fn the_binary_fails_cleanly_and_leaves_no_output_folder() {
@@ -300,24 +297,7 @@ fn the_binary_runs_checks_and_renders() {
     let dir = tempfile::tempdir().unwrap();
     let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/planar_arm.toml");
     let out = dir.path().join("planar");
-    let o = capp()
-        .args([
-            "run",
-            scenario.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--render",
-        ])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{stdout}{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    common::run_rendered(&scenario, &out);
     for f in [
         "trajectory.csv",
         "setpoints.csv",

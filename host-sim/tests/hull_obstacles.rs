@@ -6,7 +6,6 @@
 //! scenario plans end to end with the checker accepting it.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use capp_core::math::vec3;
 use capp_core::obstacle::{Hull, Obstacle, PointKind};
@@ -331,9 +330,7 @@ fn pictures_draw_a_hull_through_its_corners_on_its_surface() {
     assert!(faces.iter().all(|f| f.len() == 4));
 }
 
-fn capp() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_capp"))
-}
+use common::capp;
 
 #[test]
 fn bad_hulls_are_refused_on_one_line_at_their_obstacle_exit_2_no_output() {
@@ -484,24 +481,7 @@ fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
         ),
     );
     let out = dir.path().join("run");
-    let o = capp()
-        .args([
-            "run",
-            path.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--render",
-        ])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{stdout}{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    let stdout = common::run_rendered(&path, &out);
     assert!(
         stdout.contains("obstacle 1 \"part\"") && !stdout.contains("escapes:           none"),
         "the part is in the way: {stdout}"

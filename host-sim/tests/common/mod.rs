@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 use std::path::Path;
+use std::process::Command;
 
 use capp_sim::output::rows_csv;
 use capp_sim::trajectory::Trajectory;
@@ -108,6 +109,35 @@ pub fn planned(path: &Path) -> (Problem, Trajectory) {
 
 /// A PNG file's width and its pixels as RGB, row by row (RGB or RGBA files:
 /// alpha, if any, dropped).
+/// The `capp` binary.
+pub fn capp() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_capp"))
+}
+
+/// `capp run SCENARIO -o OUT --render`, which must succeed and reach its
+/// target: its standard output.
+pub fn run_rendered(scenario: &Path, out: &Path) -> String {
+    let o = capp()
+        .args([
+            "run",
+            scenario.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--render",
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    stdout
+}
+
 pub fn png_rgb(path: &Path) -> (usize, Vec<[u8; 3]>) {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut reader = png::Decoder::new(std::io::BufReader::new(file))

@@ -481,6 +481,30 @@ fn round(v: &Vec3, radius: f32, inflated: &Inflated) -> (f32, Vec3, f32) {
     (length_sq * inv_sq - 1.0, v * (2.0 * inv_sq), gap)
 }
 
+/// The case of [`Pair`] for a point within influence with `C - 1` =
+/// `clearance` and `grad C` = `gradient` (world frame): inside, beyond the
+/// cut-off (NaN too) or near; `distance_sq` (the bound's square) is
+/// computed only outside.
+#[inline(always)]
+fn by_clearance(clearance: f32, gradient: Vec3, distance_sq: impl FnOnce() -> f32) -> Pair {
+    if clearance <= 0.0 {
+        return Pair::Inside {
+            clearance,
+            gradient,
+        };
+    }
+    let distance_sq = distance_sq();
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(clearance < C_CUTOFF) {
+        return Pair::Beyond { distance_sq };
+    }
+    Pair::Near {
+        clearance,
+        gradient,
+        distance_sq,
+    }
+}
+
 /// Half-extents of the smallest box about the centre, in the obstacle's own
 /// frame, that holds `s` (a super-ellipsoid's semi-axes), length units; a
 /// hull's from `hulls`.
@@ -984,24 +1008,9 @@ impl Obstacle {
         }
         let inv_sq = inflated.inv_scale * inflated.inv_scale;
         let clearance = length_sq * inv_sq - 1.0;
-        let gradient = x * (2.0 * inv_sq);
-        if clearance <= 0.0 {
-            return Pair::Inside {
-                clearance,
-                gradient,
-            };
-        }
-        let slope_sq = 4.0 * inv_sq * inv_sq * length_sq;
-        let distance_sq = clearance * clearance / slope_sq;
-        #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        if !(clearance < C_CUTOFF) {
-            return Pair::Beyond { distance_sq };
-        }
-        Pair::Near {
-            clearance,
-            gradient,
-            distance_sq,
-        }
+        by_clearance(clearance, x * (2.0 * inv_sq), || {
+            clearance * clearance / (4.0 * inv_sq * inv_sq * length_sq)
+        })
     }
 
     /// The cases of [`Pair`] from a primitive's `C - 1`, `grad C` (local
@@ -1018,23 +1027,10 @@ impl Obstacle {
         } else {
             self.rotation * local_gradient
         };
-        if clearance <= 0.0 {
-            return Pair::Inside {
-                clearance,
-                gradient,
-            };
-        }
-        let distance = max(gap, 0.0);
-        let distance_sq = distance * distance;
-        #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        if !(clearance < C_CUTOFF) {
-            return Pair::Beyond { distance_sq };
-        }
-        Pair::Near {
-            clearance,
-            gradient,
-            distance_sq,
-        }
+        by_clearance(clearance, gradient, || {
+            let distance = max(gap, 0.0);
+            distance * distance
+        })
     }
 
     /// `C - 1` and `grad C` (local frame) of a primitive from its signed
