@@ -343,7 +343,24 @@ fn shape_costs() {
     let Ok(hull) = Hull::new(&prism) else {
         return;
     };
-    let hulls = [hull];
+    // The box's 8 corners, and a 16-gon prism of 32 vertices (the most a
+    // hull takes): how the cost grows with the vertex count.
+    let corners: [[f32; 3]; 8] = core::array::from_fn(|i| {
+        let side = |bit: usize, half: f32| if i & bit == 0 { half } else { -half };
+        [side(1, 20.0), side(2, 15.0), side(4, 10.0)]
+    });
+    let Ok(hull8) = Hull::new(&corners) else {
+        return;
+    };
+    let mut big = [[0.0f32; 3]; 32];
+    for (i, v) in big.iter_mut().enumerate() {
+        let (s, c) = capp_core::math::sin_cos(core::f32::consts::PI / 8.0 * (i % 16) as f32 + 0.3);
+        *v = [20.0 * c, 15.0 * s, if i < 16 { 10.0 } else { -10.0 }];
+    }
+    let Ok(hull32) = Hull::new(&big) else {
+        return;
+    };
+    let hulls = [hull, hull8, hull32];
     let shapes = [
         (
             "superellipsoid8",
@@ -381,6 +398,8 @@ fn shape_costs() {
             },
         ),
         ("hull16", Shape::Convex { hull: 0 }),
+        ("hull8", Shape::Convex { hull: 1 }),
+        ("hull32", Shape::Convex { hull: 2 }),
     ];
     for (label, shape) in shapes {
         for (turn, euler_123) in [("aligned", [0.0; 3]), ("turned", [0.3, -0.5, 0.9])] {

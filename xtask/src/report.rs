@@ -489,7 +489,7 @@ pub fn tables(
         "### What each obstacle shape costs (M4F, per point / obstacle pair)"
     );
     let _ = writeln!(w);
-    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over 96 points round it within its influence (`step_count`'s `shape_costs`). Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; the hull is an octagonal prism of 16 vertices (semi-axes 20 x 15 in, 20 in tall), measured by GJK (`obstacle/hull.rs`). Targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x, a 16-vertex hull at most 4 x.");
+    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over 96 points round it within its influence (`step_count`'s `shape_costs`). Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; the hull is an octagonal prism of 16 vertices (semi-axes 20 x 15 in, 20 in tall), measured by GJK (`obstacle/hull.rs`), whose support tries only the candidates of the search direction's cell from 12 vertices up; the box's corners and a 32-vertex prism of the same size show how the cost grows with the vertices. Targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x, a 16-vertex hull at most 4 x.");
     let _ = writeln!(w);
     let _ = writeln!(
         w,
@@ -510,6 +510,8 @@ pub fn tables(
         ("capsule", "capsule"),
         ("cylinder", "cylinder"),
         ("hull16", "convex hull, 16 vertices"),
+        ("hull8", "convex hull, the box's 8 corners"),
+        ("hull32", "convex hull, 32 vertices (a 16-gon prism)"),
     ] {
         let (aligned, turned) = (shape(label, "aligned"), shape(label, "turned"));
         let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {

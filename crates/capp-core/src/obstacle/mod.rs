@@ -355,6 +355,9 @@ enum Powers {
     /// A convex hull, measured on distance by GJK (the scenario's hull
     /// number `hull`).
     Hull,
+    /// A box (the obstacle's `primitive` is a `Cuboid` of half-extents
+    /// `half_box`): outside it, inline; inside, as [`Powers::Primitive`].
+    Cuboid,
 }
 
 impl Powers {
@@ -678,6 +681,7 @@ impl Obstacle {
             inflated,
             aligned,
             powers: match (primitive, s.shape) {
+                (Some(Primitive::Cuboid { .. }), _) => Powers::Cuboid,
                 (Some(_), _) => Powers::Primitive,
                 (None, Shape::Convex { .. }) => Powers::Hull,
                 (None, _) => Powers::new(exponents),
@@ -838,6 +842,7 @@ impl Obstacle {
                 }
             }
             Powers::Hull => return self.hull_pair(hulls, inflated, &x),
+            Powers::Cuboid => return self.cuboid_pair(inflated, &x),
             Powers::Same2 => (
                 even_term_and_gradient::<2>(x.x, inv.x),
                 even_term_and_gradient::<2>(x.y, inv.y),
@@ -976,6 +981,31 @@ impl Obstacle {
             }
         };
         self.primitive_tail(clearance, local_gradient, gap)
+    }
+
+    /// [`Obstacle::pair`] for a box, the local point `x` within its
+    /// influence box. Outside the box, from its closest point: `o` the
+    /// excess on each axis (signed as `x`), `d = |o|`, `grad C = 2 u inv o /
+    /// d`, one division; inside (or a point not finite), the cold
+    /// [`Obstacle::primitive_pair`].
+    #[inline(always)]
+    fn cuboid_pair(&self, inflated: &Inflated, x: &Vec3) -> Pair {
+        let o = from_box(x, &self.half_box);
+        let out_sq = o.dot(&o);
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(out_sq > 0.0) {
+            return match &self.primitive {
+                Some(primitive) => self.primitive_pair(primitive, inflated, x),
+                None => Pair::Far,
+            };
+        }
+        let d = crate::math::sqrt(out_sq);
+        let u = (d + self.inradius) * inflated.inv_scale;
+        self.primitive_tail(
+            u * u - 1.0,
+            o * (2.0 * u * inflated.inv_scale / d),
+            d - inflated.margin,
+        )
     }
 
     /// [`Obstacle::pair`] for a hull, the local point `x` within its
