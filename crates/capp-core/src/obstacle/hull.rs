@@ -363,23 +363,28 @@ impl Hull {
 }
 
 /// The cell of a direction: the cube face of its largest component (ties
-/// to the lower axis) and the signs of the other two (`-0` as `+0`), a
-/// closed cone each; `None` for a direction zero or not finite.
+/// to the lower axis) and the signs of the other two, a closed cone each
+/// (a zero component, either sign, lies on both sides' cones); `None` for
+/// a direction zero or not finite. On the bits: for floats not NaN the
+/// order of `|x|` is the integer order of `x`'s bits without the sign, and
+/// integer compares need no move of the FPU's flags.
 #[inline(always)]
 fn direction_cell(d: &Vec3) -> Option<usize> {
-    let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
-    let sum = ax + ay + az;
-    if !(sum > 0.0 && sum <= f32::MAX) {
+    const MAGNITUDE: u32 = 0x7fff_ffff;
+    const INFINITY: u32 = 0x7f80_0000;
+    let (x, y, z) = (d.x.to_bits(), d.y.to_bits(), d.z.to_bits());
+    let (ax, ay, az) = (x & MAGNITUDE, y & MAGNITUDE, z & MAGNITUDE);
+    if ax >= INFINITY || ay >= INFINITY || az >= INFINITY || (ax | ay | az) == 0 {
         return None;
     }
     let (axis, major, u, w) = if ax >= ay && ax >= az {
-        (0, d.x, d.y, d.z)
+        (0, x, y, z)
     } else if ay >= az {
-        (1, d.y, d.x, d.z)
+        (1, y, x, z)
     } else {
-        (2, d.z, d.x, d.y)
+        (2, z, x, y)
     };
-    Some(axis * 8 + usize::from(major < 0.0) * 4 + usize::from(u < 0.0) * 2 + usize::from(w < 0.0))
+    Some(axis * 8 + (major >> 31) as usize * 4 + (u >> 31) as usize * 2 + (w >> 31) as usize)
 }
 
 /// Each direction cell's support candidates: vertex `i` is left out of a
