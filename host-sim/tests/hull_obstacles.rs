@@ -1,6 +1,6 @@
 //! Convex hull obstacles in scenario files (`shape = "convex"` with
 //! `vertices`, `shape = "mesh"` with an STL or OBJ file): each loads as its
-//! hull's corners, the checker's exact f64 distance agrees with the core's
+//! hull's corners (a mesh of separate parts as a hull per part), the checker's exact f64 distance agrees with the core's
 //! GJK and with `shape = "box"`, every bad hull gets a one-line error naming
 //! the file and the obstacle's line (exit 2, no output folder), and a hull
 //! scenario plans end to end with the checker accepting it.
@@ -503,4 +503,208 @@ fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
     let report = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{report}");
     assert!(report.contains("ACCEPTED"), "{report}");
+}
+
+/// `triangles` moved by `by`.
+fn moved(triangles: &[[[f32; 3]; 3]], by: [f32; 3]) -> Vec<[[f32; 3]; 3]> {
+    triangles
+        .iter()
+        .map(|t| t.map(|v| [v[0] + by[0], v[1] + by[1], v[2] + by[2]]))
+        .collect()
+}
+
+#[test]
+fn a_mesh_of_separate_parts_is_a_hull_per_part() {
+    // Two boxes 0.3 apart in one binary STL (a table's two legs, say): a
+    // hull each, not one round both, so the gap between them stays free;
+    // `parts = "one"` asks for the single hull.
+    let dir = tempfile::tempdir().unwrap();
+    let h = [0.05f32, 0.05, 0.2];
+    let mut both = moved(&box_triangles(h), [-0.2, 0.0, 0.0]);
+    both.extend(moved(&box_triangles(h), [0.2, 0.0, 0.0]));
+    std::fs::write(dir.path().join("legs.stl"), binary_stl(&both)).unwrap();
+    // Two OBJ objects touching along a face (their shared corners written
+    // twice, as a convex decomposition writes its pieces): a hull each.
+    let mut obj = String::new();
+    for (k, (name, x0)) in [("left", -0.1f32), ("right", 0.0)].into_iter().enumerate() {
+        obj.push_str(&format!("o {name}\n"));
+        for t in moved(&box_triangles([0.05, 0.05, 0.05]), [x0 + 0.05, 0.0, 0.0]) {
+            for v in t {
+                obj.push_str(&format!("v {} {} {}\n", v[0], v[1], v[2]));
+            }
+        }
+        // OBJ indices count from the file's first vertex.
+        for f in 0..12 {
+            let first = 36 * k + 3 * f + 1;
+            obj.push_str(&format!("f {} {} {}\n", first, first + 1, first + 2));
+        }
+    }
+    write(dir.path(), "pieces.obj", &obj);
+    let p = load_in(
+        dir.path(),
+        "\n[[obstacles]]\nname = \"legs\"\nshape = \"mesh\"\nmesh = \"legs.stl\"\ncentre = [1.0, 0.5, 0.0]\neuler = [0.0, 0.0, 90.0]\n\n[[obstacles]]\nname = \"pieces\"\nshape = \"mesh\"\nmesh = \"pieces.obj\"\ncentre = [-1.0, 0.5, 0.0]\n\n[[obstacles]]\nname = \"legs as one\"\nshape = \"mesh\"\nmesh = \"legs.stl\"\nparts = \"one\"\ncentre = [0.0, -1.0, 0.0]\n",
+    )
+    .unwrap();
+    assert_eq!(
+        p.obstacle_names,
+        [
+            "legs part 1",
+            "legs part 2",
+            "pieces part 1",
+            "pieces part 2",
+            "legs as one"
+        ]
+    );
+    assert_eq!(p.hulls.len(), 5);
+    assert_eq!(
+        sorted(p.hulls[0].clone()),
+        sorted(
+            corners(h)
+                .iter()
+                .map(|v| [v[0] - 0.2, v[1], v[2]])
+                .collect()
+        )
+    );
+    assert_eq!(
+        sorted(p.hulls[1].clone()),
+        sorted(
+            corners(h)
+                .iter()
+                .map(|v| [v[0] + 0.2, v[1], v[2]])
+                .collect()
+        )
+    );
+    assert_eq!(p.hulls[2].len(), 8);
+    assert_eq!(p.hulls[3].len(), 8);
+    // Each part keeps the file's frame: both legs sit about the obstacle's
+    // centre, turned with it.
+    for k in 0..4 {
+        assert_eq!(p.obstacles[k].centre, p.obstacles[k / 2 * 2].centre);
+    }
+    assert!((p.obstacles[1].euler_123[2] - 90f32.to_radians()).abs() < 1e-6);
+    // One hull round both legs: their 8 outer corners.
+    assert_eq!(p.hulls[4].len(), 8);
+    assert!(p.hulls[4].iter().all(|v| v[0].abs() > 0.2));
+    // The gap between the legs (the obstacle's centre) is free of the
+    // parts, 0.15 from each, and inside the single hull.
+    let polytopes = hull_polytopes(&p);
+    let scenario = p.scenario().unwrap();
+    let world = scenario.world();
+    let centre = |o: usize| vec3(p.obstacles[o].centre);
+    for part in 0..2 {
+        let d = signed_distance(&p.obstacles[part].shape, &polytopes, [0.0; 3]);
+        assert!((d - 0.15).abs() < 1e-6, "part {part}: {d}");
+        let core = world[part].clearance_uncut(&centre(part), PointKind::Joint, world.hulls);
+        assert!(core > 0.0, "the core sees the gap free too: {core}");
+    }
+    let d = signed_distance(&p.obstacles[4].shape, &polytopes, [0.0; 3]);
+    assert!(d < 0.0, "inside the one hull: {d}");
+}
+
+#[test]
+fn mesh_parts_errors_are_one_line_at_the_obstacle() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut nine = Vec::new();
+    for k in 0..9 {
+        nine.extend(moved(
+            &box_triangles([0.01, 0.01, 0.01]),
+            [0.05 * k as f32, 0.0, 0.0],
+        ));
+    }
+    std::fs::write(dir.path().join("nine.stl"), binary_stl(&nine)).unwrap();
+    let one = |keys: &str| {
+        format!("\n[[obstacles]]\nname = \"part\"\nshape = \"mesh\"\nmesh = \"nine.stl\"\ncentre = [1.0, 0.5, 0.0]\n{keys}\n")
+    };
+    let line = head().lines().count() + 2;
+    for (keys, says) in [
+        ("", "9 separate parts"),
+        ("parts = \"some\"", "`parts` is \"separate\" or \"one\""),
+    ] {
+        let e = load_in(dir.path(), &one(keys)).unwrap_err();
+        assert!(
+            e.contains(&format!("{line}")) && e.contains(says),
+            "{keys}: {e}"
+        );
+    }
+    // A 20-sided prism (40 corners) beside a box: that part is named.
+    let ring = |k: usize, z: f32| {
+        let a = std::f32::consts::TAU * (k % 20) as f32 / 20.0;
+        [0.1 * a.cos(), 0.1 * a.sin(), z]
+    };
+    let mut prism = Vec::new();
+    for k in 0..20 {
+        let (a, b) = (ring(k, -0.1), ring(k + 1, -0.1));
+        let (c, d) = (ring(k, 0.1), ring(k + 1, 0.1));
+        prism.extend([
+            [a, b, d],
+            [a, d, c],
+            [[0.0, 0.0, -0.1], b, a],
+            [[0.0, 0.0, 0.1], c, d],
+        ]);
+    }
+    prism.extend(moved(&box_triangles([0.05, 0.05, 0.05]), [0.5, 0.0, 0.0]));
+    std::fs::write(dir.path().join("drum.stl"), binary_stl(&prism)).unwrap();
+    let e = load_in(
+        dir.path(),
+        "\n[[obstacles]]\nshape = \"mesh\"\nmesh = \"drum.stl\"\ncentre = [1.0, 0.5, 0.0]\n",
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("mesh \"drum.stl\": part 1 of 2: its hull has 40 vertices"),
+        "{e}"
+    );
+    // Nine small boxes as one hull fit.
+    let p = load_in(dir.path(), &one("parts = \"one\"")).unwrap();
+    assert_eq!(p.hulls.len(), 1);
+    let e = load(
+        "\n[[obstacles]]\nshape = \"box\"\ncentre = [1.0, 0.5, 0.0]\nhalf_extents = [0.1, 0.1, 0.1]\nparts = \"one\"\n",
+    )
+    .unwrap_err();
+    assert!(e.contains("`parts` is not a key of shape \"box\""), "{e}");
+}
+
+#[test]
+fn the_arm_reaches_between_a_meshs_parts_and_not_into_one_hull_round_them() {
+    // Two legs of a part from CAD, the target between them: with a hull
+    // per part the arm reaches it and the checker accepts the run; one hull
+    // round both legs holds the target, and the arm stops outside it.
+    let dir = tempfile::tempdir().unwrap();
+    let h = [0.05f32, 0.05, 0.2];
+    let mut both = moved(&box_triangles(h), [-0.2, 0.0, 0.0]);
+    both.extend(moved(&box_triangles(h), [0.2, 0.0, 0.0]));
+    std::fs::write(dir.path().join("legs.stl"), binary_stl(&both)).unwrap();
+    let scenario = |parts: &str| {
+        write(
+            dir.path(),
+            &format!("{parts}.toml"),
+            &format!(
+                "{}\n[[obstacles]]\nname = \"legs\"\nshape = \"mesh\"\nmesh = \"legs.stl\"\nparts = \"{parts}\"\ncentre = [0.4, 0.72, 0.0]\n",
+                head()
+            ),
+        )
+    };
+    let out = dir.path().join("separate");
+    let stdout = common::run_rendered(&scenario("separate"), &out);
+    assert!(stdout.contains("\"legs part "), "{stdout}");
+    let o = capp()
+        .args(["check", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{report}");
+    assert!(report.contains("ACCEPTED"), "{report}");
+    let o = capp()
+        .args([
+            "run",
+            scenario("one").to_str().unwrap(),
+            "-o",
+            dir.path().join("one").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("outcome:") && !stdout.contains("outcome:           reached"),
+        "{stdout}"
+    );
 }

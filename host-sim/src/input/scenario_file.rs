@@ -15,7 +15,7 @@ use std::path::Path;
 
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
-use capp_core::obstacle::{MAX_HULLS, MAX_HULL_VERTICES};
+use capp_core::obstacle::{Hull, MAX_HULLS, MAX_HULL_VERTICES};
 use capp_core::{
     pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, Shape, Solid, Waypoint,
 };
@@ -211,6 +211,9 @@ struct ObstacleSpec {
     mesh: Option<String>,
     /// `mesh`: length units per mesh unit (default 1).
     scale: Option<f64>,
+    /// `mesh`: `"separate"` (the default: a hull per separate part) or
+    /// `"one"` (one hull round the whole mesh).
+    parts: Option<String>,
     #[serde(default)]
     euler: [f64; 3],
 }
@@ -221,12 +224,15 @@ enum Given {
     Shape(Shape),
     /// `shape = "convex"`: the hull of these points (obstacle frame, length units).
     Vertices(Vec<[f64; 3]>),
-    /// `shape = "mesh"`: the hull of a mesh file's vertices, times `scale`.
+    /// `shape = "mesh"`: the hull of a mesh file's vertices, times `scale`
+    /// (or one hull per separate part).
     Mesh {
         /// The file as written.
         file: String,
         /// Length units per mesh unit.
         scale: f64,
+        /// A hull per separate part (`parts = "separate"`), not one round all.
+        separate: bool,
     },
 }
 
@@ -243,9 +249,12 @@ fn hull_of(points: &[[f64; 3]]) -> Result<Vec<[f32; 3]>, String> {
     Ok(corners.iter().map(|v| v.map(|x| x as f32)).collect())
 }
 
-/// The vertices of mesh file `file` (STL, binary or ASCII, or OBJ), as
-/// written in it; `shown` names it in errors.
-fn mesh_vertices(file: &Path, shown: &str) -> Result<Vec<[f64; 3]>, String> {
+/// The separate parts of mesh file `file` (STL, binary or ASCII, or OBJ),
+/// each as its vertices as written in the file: every object of the file
+/// (an OBJ's `o` or `g`, an ASCII STL's `solid`), split further into the
+/// groups of faces that share no vertex (vertices at the same position are
+/// one: STL repeats them per triangle). `shown` names the file in errors.
+fn mesh_parts(file: &Path, shown: &str) -> Result<Vec<Vec<[f64; 3]>>, String> {
     if !file.is_file() {
         return Err(format!(
             "obstacle: mesh \"{shown}\" not found ({})",
@@ -256,10 +265,23 @@ fn mesh_vertices(file: &Path, shown: &str) -> Result<Vec<[f64; 3]>, String> {
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let loader = mesh_loader::Loader::default().merge_meshes(true);
+    let loader = mesh_loader::Loader::default();
     let scene = match extension.as_deref() {
         Some("stl") => loader.load_stl(file),
-        Some("obj") => loader.load_obj(file),
+        // An OBJ's objects (`o`) as its groups (`g`): the loader starts a
+        // mesh at each group, and a convex decomposition (V-HACD, CoACD)
+        // writes each piece as an object.
+        Some("obj") => std::fs::read(file).and_then(|bytes| {
+            let text = String::from_utf8_lossy(&bytes);
+            let grouped: String = text
+                .lines()
+                .map(|l| match l.trim_start().strip_prefix("o ") {
+                    Some(name) => format!("g {name}\n"),
+                    None => format!("{l}\n"),
+                })
+                .collect();
+            loader.load_obj_from_slice(grouped.as_bytes(), file)
+        }),
         _ => {
             return Err(format!(
                 "obstacle: mesh \"{shown}\" is neither .stl nor .obj"
@@ -274,15 +296,89 @@ fn mesh_vertices(file: &Path, shown: &str) -> Result<Vec<[f64; 3]>, String> {
             .join(" ");
         format!("obstacle: mesh \"{shown}\" is unreadable: {reason}")
     })?;
-    let vertices: Vec<[f64; 3]> = scene
-        .meshes
-        .iter()
-        .flat_map(|m| m.vertices.iter().map(|v| v.map(f64::from)))
-        .collect();
-    if vertices.is_empty() {
+    let mut parts = Vec::new();
+    for mesh in &scene.meshes {
+        let vertices: Vec<[f64; 3]> = mesh.vertices.iter().map(|v| v.map(f64::from)).collect();
+        parts.extend(connected_parts(&vertices, &mesh.faces));
+    }
+    if parts.iter().all(Vec::is_empty) {
         return Err(format!("obstacle: mesh \"{shown}\" has no vertices"));
     }
-    Ok(vertices)
+    Ok(parts)
+}
+
+/// The groups of `faces` (triangles of indices into `vertices`) that share
+/// no vertex, each as its distinct vertices; vertices at the same position
+/// are one, and vertices no face names are a group of their own.
+fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3]>> {
+    use std::collections::BTreeMap;
+    // Each position once (by its bits), then a union-find over faces.
+    let mut welded = BTreeMap::new();
+    let ids: Vec<usize> = vertices
+        .iter()
+        .map(|v| {
+            let n = welded.len();
+            *welded.entry(v.map(f64::to_bits)).or_insert(n)
+        })
+        .collect();
+    let mut root: Vec<usize> = (0..welded.len()).collect();
+    fn find(root: &mut [usize], mut i: usize) -> usize {
+        while root[i] != i {
+            root[i] = root[root[i]];
+            i = root[i];
+        }
+        i
+    }
+    let named = |k: u32| ids.get(k as usize).copied();
+    for face in faces {
+        if let [Some(a), Some(b), Some(c)] = face.map(named) {
+            for other in [b, c] {
+                let (x, y) = (find(&mut root, a), find(&mut root, other));
+                root[x.max(y)] = x.min(y);
+            }
+        }
+    }
+    let mut groups: BTreeMap<usize, Vec<[f64; 3]>> = BTreeMap::new();
+    let mut positions: Vec<(usize, [u64; 3])> =
+        welded.into_iter().map(|(bits, id)| (id, bits)).collect();
+    positions.sort();
+    for (id, bits) in positions {
+        let r = find(&mut root, id);
+        groups.entry(r).or_default().push(bits.map(f64::from_bits));
+    }
+    groups.into_values().collect()
+}
+
+/// The hulls of a mesh's `parts` (already scaled): one per part when
+/// `separate` and every part spans a volume of its own (a closed part), or
+/// else one round them all (an open surface, such as a mesh of loose
+/// faces, has flat parts: then the mesh is one hull, as a mesh always was).
+fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<Vec<[f32; 3]>>, String> {
+    let each = || -> Option<Vec<Vec<[f32; 3]>>> {
+        parts
+            .iter()
+            .map(|part| {
+                let corners = hull_of(part).ok()?;
+                Hull::new(&corners).ok()?;
+                Some(corners)
+            })
+            .collect()
+    };
+    if separate && parts.len() > 1 {
+        if let Some(hulls) = each() {
+            return Ok(hulls);
+        }
+        // A part too big for one hull is the user's to split, not a
+        // reason to put a hull round everything.
+        for (k, part) in parts.iter().enumerate() {
+            if let Err(e) = hull_of(part) {
+                if e.contains("more than") {
+                    return Err(format!("part {} of {}: {e}", k + 1, parts.len()));
+                }
+            }
+        }
+    }
+    Ok(vec![hull_of(&parts.concat())?])
 }
 
 impl ObstacleSpec {
@@ -300,6 +396,7 @@ impl ObstacleSpec {
             ("vertices", self.vertices.is_some()),
             ("mesh", self.mesh.is_some()),
             ("scale", self.scale.is_some()),
+            ("parts", self.parts.is_some()),
         ];
         let takes: &[&str] = match kind {
             "superellipsoid" => &["semi_axes", "exponents", "exponent"],
@@ -307,7 +404,7 @@ impl ObstacleSpec {
             "box" => &["half_extents"],
             "capsule" | "cylinder" => &["radius", "length"],
             "convex" => &["vertices"],
-            "mesh" => &["mesh", "scale"],
+            "mesh" => &["mesh", "scale", "parts"],
             other => {
                 return Err(format!(
                     "obstacle: unknown shape \"{other}\" (superellipsoid, sphere, box, capsule, cylinder, convex, mesh)"
@@ -334,9 +431,19 @@ impl ObstacleSpec {
                         "obstacle: `scale` must be positive and finite (got {scale})"
                     ));
                 }
+                let separate = match self.parts.as_deref() {
+                    None | Some("separate") => true,
+                    Some("one") => false,
+                    Some(other) => {
+                        return Err(format!(
+                            "obstacle: `parts` is \"separate\" or \"one\" (got \"{other}\")"
+                        ))
+                    }
+                };
                 return Ok(Given::Mesh {
                     file: self.mesh.clone().ok_or_else(|| missing("mesh"))?,
                     scale,
+                    separate,
                 });
             }
             "superellipsoid" => {
@@ -958,38 +1065,65 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     for spec in file.obstacles {
         let line = at(spec.span());
         let s = spec.into_inner();
-        let points = match s.shape().map_err(|e| err(line, e))? {
-            Given::Shape(shape) => Err(shape),
-            Given::Vertices(v) => Ok(v),
-            Given::Mesh { file, scale } => {
-                let here = path.parent().unwrap_or(Path::new("."));
-                let v = mesh_vertices(&here.join(&file), &file).map_err(|e| err(line, e))?;
-                Ok(v.into_iter().map(|p| p.map(|x| x * scale)).collect())
-            }
-        };
-        let shape = match points {
-            Err(shape) => shape,
-            Ok(points) => {
-                if hulls.len() == MAX_HULLS {
-                    return Err(err(
-                        line,
-                        format!("obstacle: more than {MAX_HULLS} convex or mesh obstacles (each has its own hull, and a scenario holds {MAX_HULLS})"),
-                    ));
-                }
-                let corners = hull_of(&points).map_err(|e| err(line, format!("obstacle: {e}")))?;
-                hulls.push(corners);
-                Shape::Convex {
-                    hull: (hulls.len() - 1) as u8,
-                }
-            }
-        };
-        obstacles.push(Solid {
+        let solid = |shape| Solid {
             centre: s.centre.map(|x| x as f32),
             euler_123: s.euler.map(|x| (x * angle) as f32),
             shape,
-        });
-        obstacle_names.push(s.name);
-        obstacle_lines.push(Some(line));
+        };
+        let corners: Vec<Vec<[f32; 3]>> = match s.shape().map_err(|e| err(line, e))? {
+            Given::Shape(shape) => {
+                obstacles.push(solid(shape));
+                obstacle_names.push(s.name);
+                obstacle_lines.push(Some(line));
+                continue;
+            }
+            Given::Vertices(v) => {
+                vec![hull_of(&v).map_err(|e| err(line, format!("obstacle: {e}")))?]
+            }
+            Given::Mesh {
+                file,
+                scale,
+                separate,
+            } => {
+                let here = path.parent().unwrap_or(Path::new("."));
+                let parts = mesh_parts(&here.join(&file), &file).map_err(|e| err(line, e))?;
+                let scaled = parts
+                    .into_iter()
+                    .map(|part| part.into_iter().map(|p| p.map(|x| x * scale)).collect())
+                    .collect();
+                mesh_hulls(scaled, separate)
+                    .map_err(|e| err(line, format!("obstacle: mesh \"{file}\": {e}")))?
+            }
+        };
+        if hulls.len() + corners.len() > MAX_HULLS {
+            let what = if corners.len() > 1 {
+                format!(
+                    "its mesh has {} separate parts, a hull each (give `parts = \"one\"` for one hull round them all, or merge parts in CAD), and ",
+                    corners.len()
+                )
+            } else {
+                String::new()
+            };
+            return Err(err(
+                line,
+                format!("obstacle: {what}more than {MAX_HULLS} convex or mesh obstacles (each has its own hull, and a scenario holds {MAX_HULLS})"),
+            ));
+        }
+        let count = corners.len();
+        for (k, part) in corners.into_iter().enumerate() {
+            hulls.push(part);
+            obstacles.push(solid(Shape::Convex {
+                hull: (hulls.len() - 1) as u8,
+            }));
+            obstacle_names.push(if count > 1 {
+                format!("{} part {}", s.name, k + 1)
+                    .trim_start()
+                    .to_string()
+            } else {
+                s.name.clone()
+            });
+            obstacle_lines.push(Some(line));
+        }
     }
 
     // Settings: the core's defaults relative to the robot's characteristic
