@@ -513,16 +513,24 @@ fn moved(triangles: &[[[f32; 3]; 3]], by: [f32; 3]) -> Vec<[[f32; 3]; 3]> {
         .collect()
 }
 
+/// Half-extents of each of [`write_legs`]'s legs.
+const LEG: [f32; 3] = [0.05, 0.05, 0.2];
+
+/// `legs.stl` in `dir`: two boxes of half-extents [`LEG`] at x = -0.2 and
+/// 0.2 in one binary STL (a table's two legs, say), 0.3 apart.
+fn write_legs(dir: &Path) {
+    let mut both = moved(&box_triangles(LEG), [-0.2, 0.0, 0.0]);
+    both.extend(moved(&box_triangles(LEG), [0.2, 0.0, 0.0]));
+    std::fs::write(dir.join("legs.stl"), binary_stl(&both)).unwrap();
+}
+
 #[test]
 fn a_mesh_of_separate_parts_is_a_hull_per_part() {
     // Two boxes 0.3 apart in one binary STL (a table's two legs, say): a
     // hull each, not one round both, so the gap between them stays free;
     // `parts = "one"` asks for the single hull.
     let dir = tempfile::tempdir().unwrap();
-    let h = [0.05f32, 0.05, 0.2];
-    let mut both = moved(&box_triangles(h), [-0.2, 0.0, 0.0]);
-    both.extend(moved(&box_triangles(h), [0.2, 0.0, 0.0]));
-    std::fs::write(dir.path().join("legs.stl"), binary_stl(&both)).unwrap();
+    write_legs(dir.path());
     // Two OBJ objects touching along a face (their shared corners written
     // twice, as a convex decomposition writes its pieces): a hull each.
     let mut obj = String::new();
@@ -559,7 +567,7 @@ fn a_mesh_of_separate_parts_is_a_hull_per_part() {
     assert_eq!(
         sorted(p.hulls[0].clone()),
         sorted(
-            corners(h)
+            corners(LEG)
                 .iter()
                 .map(|v| [v[0] - 0.2, v[1], v[2]])
                 .collect()
@@ -568,7 +576,7 @@ fn a_mesh_of_separate_parts_is_a_hull_per_part() {
     assert_eq!(
         sorted(p.hulls[1].clone()),
         sorted(
-            corners(h)
+            corners(LEG)
                 .iter()
                 .map(|v| [v[0] + 0.2, v[1], v[2]])
                 .collect()
@@ -669,10 +677,7 @@ fn the_arm_reaches_between_a_meshs_parts_and_not_into_one_hull_round_them() {
     // per part the arm reaches it and the checker accepts the run; one hull
     // round both legs holds the target, and the arm stops outside it.
     let dir = tempfile::tempdir().unwrap();
-    let h = [0.05f32, 0.05, 0.2];
-    let mut both = moved(&box_triangles(h), [-0.2, 0.0, 0.0]);
-    both.extend(moved(&box_triangles(h), [0.2, 0.0, 0.0]));
-    std::fs::write(dir.path().join("legs.stl"), binary_stl(&both)).unwrap();
+    write_legs(dir.path());
     let scenario = |parts: &str| {
         write(
             dir.path(),
