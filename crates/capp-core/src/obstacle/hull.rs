@@ -52,7 +52,7 @@ const DIRECTION_CELLS: usize = 24;
 
 /// Fewest vertices for which the support tries only its direction's cell's
 /// candidates: a candidate costs about 21 M4F instructions against 12.5 a
-/// vertex for the plain scan, and finding the cell about 35, so an 8-vertex
+/// vertex for the plain scan, and finding the cell about 30, so an 8-vertex
 /// box is cheaper scanned (BENCHMARKS.md has the counts).
 const CELL_MIN_VERTICES: usize = 12;
 
