@@ -318,7 +318,10 @@ fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3
         .iter()
         .map(|v| {
             let n = welded.len();
-            *welded.entry(v.map(f64::to_bits)).or_insert(n)
+            // -0 and +0 are one position.
+            *welded
+                .entry(v.map(|x| if x == 0.0 { 0.0f64 } else { x }.to_bits()))
+                .or_insert(n)
         })
         .collect();
     let mut root: Vec<usize> = (0..welded.len()).collect();
@@ -1347,4 +1350,31 @@ fn scale_lengths(mut j: Joint, scale: f32) -> Joint {
         j.max_rate *= scale;
     }
     j
+}
+
+#[cfg(test)]
+mod tests {
+    use super::connected_parts;
+
+    #[test]
+    fn parts_are_the_groups_of_faces_that_share_a_position() {
+        // A tetrahedron written per triangle (as STL does), one corner as
+        // -0 in some triangles and +0 in others, and a triangle apart.
+        let (a, b, c) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let (d, minus) = ([0.0, 0.0, 1.0], [-0.0, 0.0, -0.0]);
+        let far = [[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]];
+        let mut vertices = vec![a, b, c, minus, b, d, a, c, d, b, c, d];
+        vertices.extend(far);
+        let faces: Vec<[u32; 3]> = (0..5).map(|f| [3 * f, 3 * f + 1, 3 * f + 2]).collect();
+        let mut parts = connected_parts(&vertices, &faces);
+        parts
+            .iter_mut()
+            .for_each(|p| p.sort_by(|x, y| x.partial_cmp(y).unwrap()));
+        assert_eq!(parts.len(), 2, "{parts:?}");
+        assert_eq!(parts[0].len(), 4, "the tetrahedron's 4 corners once each");
+        assert_eq!(parts[1], [far[0], far[2], far[1]]);
+        // A vertex no face names is a part of its own.
+        vertices.push([9.0, 9.0, 9.0]);
+        assert_eq!(connected_parts(&vertices, &faces).len(), 3);
+    }
 }
