@@ -126,6 +126,9 @@ pub fn report(problem: &Problem) -> Result<String, LoadError> {
         out,
         "\nlink capsules (the chord from each joint's pivot to the next, or to the end effector; the radius the self-collision checks use):"
     );
+    // A link capsule this many times the body's thickest fitted capsule is
+    // reported as round a chord that misses its body.
+    const CHORD_OFF_BODY: f64 = 1.5;
     for k in 0..n {
         let radius = problem.links.radius.get(k).copied().unwrap_or(0.0);
         let _ = writeln!(
@@ -149,6 +152,18 @@ pub fn report(problem: &Problem) -> Result<String, LoadError> {
                     xyz([c.a.x, c.a.y, c.a.z]),
                     xyz([c.b.x, c.b.y, c.b.z]),
                     c.radius
+                );
+            }
+            // Where the body lies off the chord, the capsule round the
+            // chord is much fatter than the body: say so, since it is what
+            // self-collision checks (a start refused as links touching, a
+            // dead end at a pair's floor).
+            let thickest = body.capsules.iter().map(|c| c.radius).fold(0.0, f64::max);
+            if thickest > 0.0 && radius as f64 >= CHORD_OFF_BODY * thickest {
+                let _ = writeln!(
+                    out,
+                    "     the chord misses this body: its capsule is {:.1} times as thick as the body's thickest, and self-collision checks the capsule",
+                    radius as f64 / thickest
                 );
             }
         }

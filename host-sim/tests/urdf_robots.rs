@@ -423,6 +423,18 @@ fn capp_robot_prints_the_chain_limits_and_capsules() {
     );
     assert!(text.contains("URDF links forearm_link:"), "{text}");
     assert!(text.contains("base (base_link, base):"), "{text}");
+    // The upper arm's capsule (0.2121 m round its chord) against its body's
+    // fitted capsule (0.1006 m): the chord misses the body, and it says so
+    // right after that body's capsules.
+    let upper = text
+        .split("link 2 (after joint \"shoulder_lift_joint\")")
+        .nth(1)
+        .and_then(|rest| rest.split("  link 3 ").next())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        upper.contains("the chord misses this body: its capsule is 2.1 times as thick"),
+        "{upper}"
+    );
     // A DH robot prints its table.
     let o = Command::new(env!("CARGO_BIN_EXE_capp"))
         .args(["robot", scenario("planar_arm.toml").to_str().unwrap()])
