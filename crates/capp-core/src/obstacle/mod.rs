@@ -954,26 +954,6 @@ impl Obstacle {
                 radius,
                 half_length,
             } => round(&from_segment(x, half_length), radius, inflated),
-            Primitive::Cuboid { half_extents } => {
-                // Outside: from the box's closest point, `o` the excess on
-                // each axis (signed as `x`); `grad C = 2 u inv o / d`, one
-                // division.
-                let o = from_box(x, &half_extents);
-                let out_sq = o.dot(&o);
-                if out_sq > 0.0 {
-                    let d = crate::math::sqrt(out_sq);
-                    let u = (d + self.inradius) * inflated.inv_scale;
-                    (
-                        u * u - 1.0,
-                        o * (2.0 * u * inflated.inv_scale / d),
-                        d - inflated.margin,
-                    )
-                } else {
-                    let (d, normal) = signed_distance(primitive, x);
-                    let (clearance, gradient) = self.rebuilt(d, &normal, inflated);
-                    (clearance, gradient, d - inflated.margin)
-                }
-            }
             _ => {
                 let (d, normal) = signed_distance(primitive, x);
                 let (clearance, gradient) = self.rebuilt(d, &normal, inflated);
@@ -987,7 +967,8 @@ impl Obstacle {
     /// influence box. Outside the box, from its closest point: `o` the
     /// excess on each axis (signed as `x`), `d = |o|`, `grad C = 2 u inv o /
     /// d`, one division; inside (or a point not finite), the cold
-    /// [`Obstacle::primitive_pair`].
+    /// [`Obstacle::primitive_pair`] (the signed distance, as for every
+    /// primitive).
     #[inline(always)]
     fn cuboid_pair(&self, inflated: &Inflated, x: &Vec3) -> Pair {
         let o = from_box(x, &self.half_box);
