@@ -482,9 +482,16 @@ impl Problem {
                     if self.point_is_joint(point) { "joint" } else { "link" },
                 ),
                 StartError::SelfCollision { links: [a, b] } => format!(
-                    "start configuration puts {} into {} (self-collision: their capsules touch)",
+                    "start configuration puts {} into {} (self-collision: their capsules touch{})",
                     self.link_label(a as usize),
                     self.link_label(b as usize),
+                    // A URDF's capsules are round the chords between pivots,
+                    // which can be far thicker than the bodies.
+                    if self.urdf.is_some() {
+                        "; `capp robot` shows each link's capsule against its body"
+                    } else {
+                        ""
+                    },
                 ),
                 other => format!("start configuration: {other}"),
             };

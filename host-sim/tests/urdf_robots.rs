@@ -387,6 +387,40 @@ fn malformed_urdfs_stop_capp_run_with_one_line_and_no_output() {
 }
 
 #[test]
+fn a_urdf_start_in_self_collision_points_to_capp_robot() {
+    // The UR5 with its elbow folded to 3.0 rad: the shoulder's capsule and
+    // the wrist's touch. The error says which, on one line, and where to
+    // see the capsules (round chords that can miss the bodies).
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scenario("ur5_table.toml"))
+        .unwrap()
+        .replace("../../robots", &repo().join("robots").display().to_string())
+        .replace(
+            "example-robot-data = \"../..\"",
+            &format!("example-robot-data = \"{}\"", repo().display()),
+        )
+        .replace(
+            "start = [0.0, -1.571, 1.571, -1.571, -1.571, 0.0]",
+            "start = [0.0, -1.571, 3.0, -1.571, -1.571, 0.0]",
+        );
+    let path = dir.path().join("folded.toml");
+    std::fs::write(&path, text).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_capp"))
+        .args(["run", path.to_str().unwrap(), "-o"])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("start configuration puts link 1 (after joint \"shoulder_pan_joint\") into link 5 (after joint \"wrist_2_joint\") (self-collision: their capsules touch; `capp robot` shows each link's capsule against its body)"),
+        "{err}"
+    );
+    assert!(!dir.path().join("out").exists());
+}
+
+#[test]
 fn capp_robot_prints_the_chain_limits_and_capsules() {
     let o = Command::new(env!("CARGO_BIN_EXE_capp"))
         .args(["robot", scenario("ur5_table.toml").to_str().unwrap()])
