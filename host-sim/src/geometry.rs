@@ -453,15 +453,7 @@ impl Shape {
     /// distance `d`, `((d + rho) / (margin + rho))^2 - 1` (`rho` its
     /// inradius), negative exactly when `d < margin`.
     fn clearance(&self, p: [f64; 3], margin: f64) -> f64 {
-        let d = [
-            p[0] - self.centre[0],
-            p[1] - self.centre[1],
-            p[2] - self.centre[2],
-        ];
-        // x_i = (R^T d)_i = column i of R dotted with d.
-        let x: [f64; 3] = std::array::from_fn(|i| {
-            self.r[0][i] * d[0] + self.r[1][i] * d[1] + self.r[2][i] * d[2]
-        });
+        let x = to_local(self.centre, &self.r, p);
         match &self.form {
             Form::SuperEllipsoid { axes, exponents } => {
                 let mut c = 0.0;
@@ -483,6 +475,14 @@ impl Shape {
             }
         }
     }
+}
+
+/// The world point `p` in the frame of a shape at `centre` turned by `r`
+/// ([`rotation`]): `R^T (p - centre)`.
+pub fn to_local(centre: [f64; 3], r: &[[f64; 3]; 3], p: [f64; 3]) -> [f64; 3] {
+    let d = [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]];
+    // x_i = (R^T d)_i = column i of R dotted with d.
+    std::array::from_fn(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2])
 }
 
 /// The problem's hulls with their faces enumerated ([`Polytope`]), by index.

@@ -308,17 +308,7 @@ fn the_binary_runs_checks_and_renders() {
     ] {
         assert!(out.join(f).is_file(), "{f}");
     }
-    let o = capp()
-        .args(["check", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-    assert!(String::from_utf8_lossy(&o.stdout).contains("ACCEPTED"));
+    common::check_accepts(&out);
     // Run again onto the same folder: replaced, not refused.
     let o = capp()
         .args([

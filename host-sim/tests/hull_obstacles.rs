@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use capp_core::math::vec3;
 use capp_core::obstacle::{Hull, Obstacle, PointKind};
 use capp_core::Shape;
-use capp_sim::geometry::{hull_polytopes, signed_distance};
+use capp_sim::geometry::{hull_polytopes, signed_distance, to_local};
 use capp_sim::Problem;
 
 mod common;
@@ -267,8 +267,7 @@ fn a_box_as_eight_vertices_is_the_box() {
     let mut rng = 11u64;
     for _ in 0..3000 {
         let world_point = [0, 1, 2].map(|i| c[i] + 0.5 * lcg(&mut rng));
-        let d = [0, 1, 2].map(|i| world_point[i] - c[i]);
-        let local = [0, 1, 2].map(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2]);
+        let local = to_local(c, &r, world_point);
         let as_box = signed_distance(&p.obstacles[0].shape, &hulls, local);
         let as_hull = signed_distance(&p.obstacles[1].shape, &hulls, local);
         assert!(
@@ -305,10 +304,7 @@ fn pictures_draw_a_hull_through_its_corners_on_its_surface() {
     let hulls = hull_polytopes(&p);
     let c = p.obstacles[0].centre.map(f64::from);
     let r = capp_sim::geometry::rotation(p.obstacles[0].euler_123.map(f64::from));
-    let local = |w: [f64; 3]| {
-        let d = [0, 1, 2].map(|i| w[i] - c[i]);
-        [0, 1, 2].map(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2])
-    };
+    let local = |w: [f64; 3]| to_local(c, &r, w);
     let xyz = surface(&p, 0, 24, 48);
     assert_eq!(xyz.len(), 25 * 48);
     for w in &xyz {
@@ -496,13 +492,7 @@ fn a_hull_scenario_plans_end_to_end_and_the_checker_accepts_it() {
         viewer.contains("\"triangles\""),
         "the hulls drawn by their faces"
     );
-    let o = capp()
-        .args(["check", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(o.status.code(), Some(0), "{report}");
-    assert!(report.contains("ACCEPTED"), "{report}");
+    common::check_accepts(&out);
 }
 
 /// `triangles` moved by `by`.
@@ -691,13 +681,7 @@ fn the_arm_reaches_between_a_meshs_parts_and_not_into_one_hull_round_them() {
     let out = dir.path().join("separate");
     let stdout = common::run_rendered(&scenario("separate"), &out);
     assert!(stdout.contains("\"legs part "), "{stdout}");
-    let o = capp()
-        .args(["check", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(o.status.code(), Some(0), "{report}");
-    assert!(report.contains("ACCEPTED"), "{report}");
+    common::check_accepts(&out);
     let o = capp()
         .args([
             "run",

@@ -955,28 +955,18 @@ fn hulls_are_loaded_checked_and_cleared_with_the_obstacles() {
         obstacle: convex(0),
     });
     uart.send(&run);
-    let got = exchange(&mut node, &mut uart);
     assert_eq!(
-        got.last(),
-        Some(&Reply::Error {
-            command: 8,
-            code: ErrorCode::InvalidHull,
-            index: 1,
-        })
+        outcomes(&exchange(&mut node, &mut uart)).last(),
+        Some(&(8, ErrorCode::InvalidHull, 1))
     );
     // Out of order: hull 3 while two are loaded.
     uart.send(&Command::Hull {
         index: 3,
         vertices: vertices(3.0),
     });
-    let got = exchange(&mut node, &mut uart);
     assert_eq!(
-        got.last(),
-        Some(&Reply::Error {
-            command: 15,
-            code: ErrorCode::OutOfOrder,
-            index: 3,
-        })
+        outcomes(&exchange(&mut node, &mut uart)).last(),
+        Some(&(15, ErrorCode::OutOfOrder, 3))
     );
     uart.send(&Command::Clear(Part::Obstacles));
     uart.send(&Command::Obstacle {
@@ -984,14 +974,9 @@ fn hulls_are_loaded_checked_and_cleared_with_the_obstacles() {
         obstacle: convex(0),
     });
     uart.send(&run);
-    let got = exchange(&mut node, &mut uart);
     assert_eq!(
-        got.last(),
-        Some(&Reply::Error {
-            command: 8,
-            code: ErrorCode::InvalidObstacle,
-            index: 0,
-        })
+        outcomes(&exchange(&mut node, &mut uart)).last(),
+        Some(&(8, ErrorCode::InvalidObstacle, 0))
     );
     uart.send(&Command::Hull {
         index: 0,

@@ -236,15 +236,32 @@ enum Given {
     },
 }
 
+/// Why points make no hull the core takes.
+enum NoHull {
+    /// The points themselves: none, not finite, or flat.
+    Points(crate::polytope::HullFailure),
+    /// Their hull has this many corners, more than [`MAX_HULL_VERTICES`].
+    Corners(usize),
+}
+
+impl std::fmt::Display for NoHull {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NoHull::Points(e) => write!(f, "{e}"),
+            NoHull::Corners(n) => write!(
+                f,
+                "its hull has {n} vertices, more than the {MAX_HULL_VERTICES} a hull may have (split the part into convex pieces or simplify it)"
+            ),
+        }
+    }
+}
+
 /// The corners of the hull of `points` (obstacle frame, length units) as
-/// the core takes them, or why not, as a sentence's end.
-fn hull_of(points: &[[f64; 3]]) -> Result<Vec<[f32; 3]>, String> {
-    let corners = crate::polytope::hull_vertices(points).map_err(|e| format!("{e}"))?;
+/// the core takes them, or why not.
+fn hull_of(points: &[[f64; 3]]) -> Result<Vec<[f32; 3]>, NoHull> {
+    let corners = crate::polytope::hull_vertices(points).map_err(NoHull::Points)?;
     if corners.len() > MAX_HULL_VERTICES {
-        return Err(format!(
-            "its hull has {} vertices, more than the {MAX_HULL_VERTICES} a hull may have (split the part into convex pieces or simplify it)",
-            corners.len()
-        ));
+        return Err(NoHull::Corners(corners.len()));
     }
     Ok(corners.iter().map(|v| v.map(|x| x as f32)).collect())
 }
@@ -357,31 +374,25 @@ fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3
 /// else one round them all (an open surface, such as a mesh of loose
 /// faces, has flat parts: then the mesh is one hull, as a mesh always was).
 fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<Vec<[f32; 3]>>, String> {
-    let each = || -> Option<Vec<Vec<[f32; 3]>>> {
-        parts
-            .iter()
-            .map(|part| {
-                let corners = hull_of(part).ok()?;
-                Hull::new(&corners).ok()?;
-                Some(corners)
-            })
-            .collect()
-    };
     if separate && parts.len() > 1 {
-        if let Some(hulls) = each() {
-            return Ok(hulls);
-        }
-        // A part too big for one hull is the user's to split, not a
-        // reason to put a hull round everything.
+        let mut hulls = Vec::new();
         for (k, part) in parts.iter().enumerate() {
-            if let Err(e) = hull_of(part) {
-                if e.contains("more than") {
-                    return Err(format!("part {} of {}: {e}", k + 1, parts.len()));
+            match hull_of(part) {
+                // A part too big for one hull is the user's to split, not a
+                // reason to put a hull round everything.
+                Err(e @ NoHull::Corners(_)) => {
+                    return Err(format!("part {} of {}: {e}", k + 1, parts.len()))
                 }
+                Ok(corners) if Hull::new(&corners).is_ok() => hulls.push(corners),
+                // Flat (to the core too): the mesh is one hull, below.
+                _ => {}
             }
         }
+        if hulls.len() == parts.len() {
+            return Ok(hulls);
+        }
     }
-    Ok(vec![hull_of(&parts.concat())?])
+    Ok(vec![hull_of(&parts.concat()).map_err(|e| e.to_string())?])
 }
 
 impl ObstacleSpec {

@@ -138,6 +138,18 @@ pub fn run_rendered(scenario: &Path, out: &Path) -> String {
     stdout
 }
 
+/// `capp check OUT`, which must exit 0 and accept the run: its report.
+pub fn check_accepts(out: &Path) -> String {
+    let o = capp()
+        .args(["check", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(o.status.code(), Some(0), "{report}");
+    assert!(report.contains("ACCEPTED"), "{report}");
+    report
+}
+
 pub fn png_rgb(path: &Path) -> (usize, Vec<[u8; 3]>) {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut reader = png::Decoder::new(std::io::BufReader::new(file))
