@@ -104,6 +104,12 @@ pub struct LinkGeometry {
     pub enabled: bool,
     /// Capsule radius per link, length units.
     pub radius: Vec<f32>,
+    /// Each link's capsule segment, when it is not the chord: empty for a
+    /// robot whose capsules are round its chords (every DH robot), else one
+    /// per link, the segment's two ends in the frame of the body joint `k`
+    /// moves (after its motion: `geometry::joint_frames`' `T_k`), length
+    /// units. The core's `Scenario::set_link_segments` takes them.
+    pub segments: Vec<[[f32; 3]; 2]>,
     /// Pairs of links (0-based) allowed to touch: the preset's and `[[robot.allow]]`'s.
     pub allowed: Vec<(usize, usize)>,
     /// The home configuration, for the pairs in contact there.

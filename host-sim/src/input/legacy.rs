@@ -326,6 +326,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         links: crate::problem::LinkGeometry {
             enabled: true,
             radius: vec![radius; n],
+            segments: Vec::new(),
             allowed,
             home: listing_home,
         },

@@ -1256,6 +1256,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let links = crate::problem::LinkGeometry {
         enabled: robot.self_collision.unwrap_or(true),
         radius: radii.iter().map(|r| r.unwrap_or(default_radius)).collect(),
+        segments: Vec::new(),
         allowed,
         home: link_home,
     };
