@@ -384,6 +384,17 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         Ok(())
     }
 
+    /// Makes each link's capsule the segment `segments[k]` fixed in its
+    /// body (its two ends in joint `k`'s frame after its motion, length
+    /// units), not its chord ([`Robot::set_link_segments`]); an empty slice
+    /// goes back to the chords. The capsules' radii and checked pairs stay
+    /// (given before or after). On error the links keep their chords.
+    pub fn set_link_segments(&mut self, segments: &[[[f32; 3]; 2]]) -> Result<(), ScenarioError> {
+        let result = self.robot.set_link_segments(segments);
+        self.capsules.fit(&self.robot);
+        Ok(result?)
+    }
+
     /// The links' capsules and checked pairs (none unless
     /// [`Scenario::set_link_capsules`] gave them).
     pub fn capsules(&self) -> &LinkCapsules<N> {

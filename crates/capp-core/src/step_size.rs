@@ -32,7 +32,9 @@
 //! `z_i x z_j` for a revolute `i` before a prismatic `j`; 0 otherwise. Grouped
 //! by `m`, the revolute terms are `dq_m (2 w_<m + dq_m z_m) x (z_m x (p -
 //! o_m))`. `J_p dq` is linear in `p` along a link (`v(x) = w x x + b`), so a
-//! link's worst point is one of its ends. The largest `s` with travel at most
+//! link's worst point is one of its ends (a link whose self-collision
+//! capsule is a segment of its own, off its chord: one of the chord's and
+//! the segment's four ends, with `L_mk` to the farther of them). The largest `s` with travel at most
 //! `fraction` times the link's distance `D` solves the quadratic:
 //! `s = 2 D / (A + sqrt(A^2 + 4 Q D))`. Each link's distance is the lower
 //! bound of [`crate::obstacle::Contact::distance_sq`] (it holds for every
@@ -153,6 +155,15 @@ impl SecondOrder {
         self.still(chain)
     }
 
+    /// `Q` of a point at most `chain` along the chain (as `link` and
+    /// `still` take it) from the base, for the joints added so far, without
+    /// adding anything: a link's capsule points
+    /// ([`crate::robot::Robot::set_link_segments`]) reach past its chord.
+    #[inline(always)]
+    pub(crate) fn at(&self, chain: f32) -> f32 {
+        max(0.5 * (chain * self.lever_sum - self.lever_base), 0.0) + self.sliding
+    }
+
     /// `Q_k` of the next link (chain length `chain`) when its joint does
     /// not move.
     #[inline(always)]
@@ -193,6 +204,7 @@ pub fn advancement<const N: usize>(
     let mut start_v = Vec3::zeros();
     let mut scale = 1.0f32;
     let fraction_sq = fraction * fraction;
+    let segments = frames.has_segments();
     for (j, ((joint, link), (&r, &d_sq))) in robot
         .joints()
         .iter()
@@ -210,9 +222,20 @@ pub fn advancement<const N: usize>(
             }
             JointKind::Prismatic => b += z * step,
         }
-        let second = q_sums.link(joint.kind, size, link.chain);
+        let mut second = q_sums.link(joint.kind, size, link.chain);
         let end_v = w.cross(&frames.link_end(j)) + b;
-        let first_sq = max(start_v.norm_squared(), end_v.norm_squared());
+        let mut first_sq = max(start_v.norm_squared(), end_v.norm_squared());
+        if segments {
+            // The link's capsule has points off its chord: its segment's
+            // ends move in the same field, and reach farther along it.
+            let (start, end) = frames.capsule(j);
+            let ends_sq = max(
+                (w.cross(&start) + b).norm_squared(),
+                (w.cross(&end) + b).norm_squared(),
+            );
+            first_sq = max(first_sq, ends_sq);
+            second = q_sums.at(link.capsule_chain);
+        }
         let pressed = nearest.filter(|h| h.link as usize == j);
         let (v0, v1) = (start_v, end_v);
         start_v = end_v;
@@ -287,4 +310,95 @@ fn sliding_bound<const N: usize>(
         );
     }
     Some((s, h.others_sq))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::escape::rng::Rng;
+    use crate::kinematics::forward_kinematics;
+    use crate::robot::{general_from_dh, Joint};
+
+    const N: usize = 8;
+
+    /// A random revolute chain of 3-7 joints; half of them as general
+    /// joints whose capsules are segments of their own, up to 0.5 off their
+    /// chords.
+    fn random_arm(rng: &mut Rng) -> Robot<N> {
+        let n = 3 + ((rng.uniform() + 1.0) * 2.5) as usize;
+        let joints: heapless::Vec<Joint, N> = (0..n)
+            .map(|_| {
+                Joint::revolute(
+                    rng.uniform() * 3.1,
+                    0.3 + 0.3 * rng.uniform(),
+                    0.2 + 0.2 * rng.uniform(),
+                    -3.0,
+                    3.0,
+                    1.0,
+                )
+            })
+            .collect();
+        if rng.uniform() > 0.0 {
+            return Robot::new(&joints).unwrap();
+        }
+        let mut general = joints.clone();
+        let tool = general_from_dh(&joints, &mut general);
+        let mut robot = Robot::new_with_tool(&general, &tool).unwrap();
+        let segments: heapless::Vec<[[f32; 3]; 2], N> = (0..n)
+            .map(|_| [0, 1].map(|_| [0, 1, 2].map(|_| 0.5 * rng.uniform())))
+            .collect();
+        robot.set_link_segments(&segments).unwrap();
+        robot
+    }
+
+    /// Soundness of [`advancement`]: along the step it allows, no point of
+    /// a link's chord or capsule (sampled densely in the joints' motion)
+    /// travels farther than its room; and it does not refuse everything.
+    #[test]
+    fn no_point_of_a_link_travels_farther_than_its_room() {
+        let mut rng = Rng::seeded(23, &[]);
+        let (mut segment_arms, mut bound) = (0, 0);
+        for _ in 0..300 {
+            let robot = random_arm(&mut rng);
+            let n = robot.len();
+            segment_arms += robot.has_link_segments() as usize;
+            let q: heapless::Vec<f32, N> = (0..n).map(|_| 2.0 * rng.uniform()).collect();
+            let rate: heapless::Vec<f32, N> = (0..n).map(|_| rng.uniform()).collect();
+            let mut room_sq = [f32::INFINITY; N];
+            let link = ((rng.uniform() + 1.0) * 0.5 * n as f32) as usize % n;
+            room_sq[link] = (0.01 + 0.1 * (rng.uniform() + 1.0)).powi(2);
+            let mut frames = Frames::<N>::default();
+            forward_kinematics(&robot, &q, &mut frames);
+            let h = advancement(&robot, &frames, &room_sq[..n], None, &rate, 0.5, 1.0);
+            assert!(h > 0.0);
+            bound += (h < 0.5) as usize;
+            let points = |f: &Frames<N>| {
+                let (start, end) = f.capsule(link);
+                let chord = (f.pivot(link), f.link_end(link));
+                [chord, (start, end)]
+                    .map(|(a, b)| [0.0, 0.25, 0.5, 0.75, 1.0].map(|t| a + (b - a) * t))
+            };
+            let before = points(&frames);
+            let mut moved = Frames::<N>::default();
+            let mut travel = 0.0f32;
+            for i in 1..=200 {
+                let s = h * i as f32 / 200.0;
+                let qs: heapless::Vec<f32, N> =
+                    q.iter().zip(&rate).map(|(q, r)| q + s * r).collect();
+                forward_kinematics(&robot, &qs, &mut moved);
+                for (a, b) in before.iter().flatten().zip(points(&moved).iter().flatten()) {
+                    travel = travel.max((b - a).norm());
+                }
+            }
+            let room = room_sq[link].sqrt();
+            assert!(
+                travel <= room * 1.0001 + 1e-6,
+                "link {link}: travel {travel} > room {room}"
+            );
+        }
+        assert!(
+            segment_arms > 100 && bound > 100,
+            "{segment_arms} arms with segments, {bound} steps bound"
+        );
+    }
 }

@@ -22,6 +22,11 @@ pub struct Frames<const N: usize> {
     pub(super) axis: [Vec3; N],
     /// Orientation of the end-effector frame `n`: columns `r_n1, r_n2, r_n3` (eq. 6).
     pub(super) end_rotation: Mat3,
+    /// Each link's capsule segment, world, when the robot has segments of
+    /// its own ([`crate::robot::Robot::set_link_segments`]).
+    pub(super) segment: [[Vec3; 2]; N],
+    /// Whether `segment` holds them (else each link's capsule is its chord).
+    pub(super) segments: bool,
 }
 
 impl<const N: usize> Default for Frames<N> {
@@ -32,6 +37,8 @@ impl<const N: usize> Default for Frames<N> {
             link_end: [Vec3::zeros(); N],
             axis: [Vec3::z(); N],
             end_rotation: Mat3::identity(),
+            segment: [[Vec3::zeros(); 2]; N],
+            segments: false,
         }
     }
 }
@@ -66,6 +73,28 @@ impl<const N: usize> Frames<N> {
         } else {
             self.link_end(j - 1)
         }
+    }
+
+    /// The segment link `j`'s self-collision capsule is round, world, length
+    /// units: its own segment when the robot has them
+    /// ([`crate::robot::Robot::set_link_segments`]), else its chord, from
+    /// [`Frames::pivot`] to [`Frames::link_end`]. Either is fixed in the
+    /// body joint `j` moves (a prismatic joint's chord stretches with it).
+    #[inline]
+    pub fn capsule(&self, j: usize) -> (Vec3, Vec3) {
+        if self.segments {
+            let [a, b] = self.segment.get(j).copied().unwrap_or([Vec3::zeros(); 2]);
+            (a, b)
+        } else {
+            (self.pivot(j), self.link_end(j))
+        }
+    }
+
+    /// Whether the links' capsules are segments of their own, not chords
+    /// ([`Frames::capsule`]).
+    #[inline]
+    pub fn has_segments(&self) -> bool {
+        self.segments
     }
 
     /// Unit axis `z_j` joint `j` turns about or slides along.

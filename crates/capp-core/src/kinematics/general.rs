@@ -28,6 +28,8 @@ pub(super) fn forward<const N: usize>(
     let mut rot = Mat3::identity();
     let mut o = Vec3::zeros();
     let mut n = 0usize;
+    let segments = robot.has_link_segments();
+    frames.segments = segments;
     frames.base = o;
     for (j, ((joint, link), &qj)) in robot.joints().iter().zip(robot.links()).zip(q).enumerate() {
         // The joint's frame at q = 0: the previous frame, then the origin.
@@ -54,6 +56,12 @@ pub(super) fn forward<const N: usize>(
                 rot = Mat3::from_columns(&[x * c + y * s, y * c - x * s, z]);
             }
             JointKind::Prismatic => o += z * qj,
+        }
+        // The capsule's segment, fixed in the body this joint moves.
+        if segments {
+            if let Some(out) = frames.segment.get_mut(j) {
+                *out = link.segment.map(|p| o + rot * p);
+            }
         }
         n += 1;
     }

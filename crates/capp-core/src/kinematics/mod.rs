@@ -67,6 +67,7 @@ fn forward_dh<const N: usize>(robot: &Robot<N>, q: &[f32], frames: &mut Frames<N
     let mut o = Vec3::zeros();
     let mut n = 0;
     frames.base = o;
+    frames.segments = false;
     for (((joint, link), &qj), (end, axis)) in robot
         .joints()
         .iter()

@@ -365,6 +365,15 @@ pub(crate) struct LinkConstants {
     /// configuration, on the distance between any two points of the arm up to
     /// this link (length units).
     pub(crate) chain: f32,
+    /// The link's capsule segment ([`Robot::set_link_segments`]), its two
+    /// ends in the joint's `z`-aligned frame after its motion (the frame the
+    /// forward pass carries), length units; zeros without segments.
+    pub(crate) segment: [Vec3; 2],
+    /// `chain` for the capsule's points as well as the chord's: the chain
+    /// up to this link's pivot plus the farthest either reaches from it
+    /// (`chain` itself without segments). Bounds `|p - o_m|` for every point
+    /// `p` of this link's chord or capsule and every earlier pivot `o_m`.
+    pub(crate) capsule_chain: f32,
 }
 
 /// All zeros (the origin's rotation too: it is read only for a general
@@ -382,6 +391,8 @@ impl Default for LinkConstants {
             },
             longest: 0.0,
             chain: 0.0,
+            segment: [Vec3::zeros(); 2],
+            capsule_chain: 0.0,
         }
     }
 }
@@ -403,6 +414,9 @@ pub struct Robot<const N: usize> {
     general: bool,
     /// How far the first joint's pivot is from the base, length units.
     base_offset: f32,
+    /// Whether the links' capsules are segments of their own
+    /// ([`Robot::set_link_segments`]), not their chords.
+    segments: bool,
 }
 
 impl<const N: usize> Robot<N> {
@@ -437,6 +451,7 @@ impl<const N: usize> Robot<N> {
             has_tool: false,
             general: false,
             base_offset: 0.0,
+            segments: false,
         }
     }
 
@@ -465,6 +480,7 @@ impl<const N: usize> Robot<N> {
             has_tool,
             general,
             base_offset,
+            segments,
         } = self;
         joints.clear();
         links.fill(LinkConstants::default());
@@ -473,6 +489,7 @@ impl<const N: usize> Robot<N> {
         *has_tool = false;
         *general = false;
         *base_offset = 0.0;
+        *segments = false;
     }
 
     fn fill(&mut self, joints: &[Joint], tool: &Placement) -> Result<(), RobotError> {
@@ -486,6 +503,7 @@ impl<const N: usize> Robot<N> {
             has_tool,
             general,
             base_offset,
+            segments: _,
         } = self;
         if joints.is_empty() {
             return Err(RobotError::Empty);
@@ -587,6 +605,8 @@ impl<const N: usize> Robot<N> {
                 origin,
                 longest,
                 chain: 0.0,
+                segment: [Vec3::zeros(); 2],
+                capsule_chain: 0.0,
             };
             // Capacity was checked above, so the push cannot fail.
             let _ = out.push(*j);
@@ -623,8 +643,96 @@ impl<const N: usize> Robot<N> {
             }
             chain += link.longest;
             link.chain = chain;
+            link.capsule_chain = chain;
         }
         Ok(())
+    }
+
+    /// Gives each link a capsule segment of its own, fixed in the body its
+    /// joint moves, in place of its chord: `segments[k]` holds the two ends
+    /// in joint `k`'s frame after its motion (a URDF joint's frame: the
+    /// parent's, then the joint's `<origin>`, then the motion about or along
+    /// its axis), length units. Self-collision then measures link `k` as the
+    /// capsule round `T_k a -> T_k b` ([`crate::kinematics::Frames::capsule`]);
+    /// the obstacles' avoidance points stay on the chords. An empty slice
+    /// goes back to the chords. Only general joints take segments (a DH
+    /// robot keeps its chords, and its plans their bits).
+    ///
+    /// On error the robot keeps its chords.
+    pub fn set_link_segments(
+        &mut self,
+        segments: &[[[f32; 3]; 2]],
+    ) -> Result<(), crate::self_collision::CapsuleError> {
+        use crate::self_collision::CapsuleError;
+        let n = self.len();
+        self.segments = false;
+        let mut chain_before = 0.0f32;
+        for link in self.links.iter_mut().take(n) {
+            link.segment = [Vec3::zeros(); 2];
+            link.capsule_chain = link.chain;
+        }
+        if segments.is_empty() {
+            return Ok(());
+        }
+        if !self.general {
+            return Err(CapsuleError::SegmentsNeedGeneralJoints);
+        }
+        if segments.len() != n {
+            return Err(CapsuleError::WrongLength {
+                given: segments.len(),
+                links: n,
+            });
+        }
+        for (k, segment) in segments.iter().enumerate() {
+            if !segment
+                .iter()
+                .flatten()
+                .all(|x| x.is_finite() && x.abs() <= MAX_LENGTH)
+            {
+                return Err(CapsuleError::BadSegment { link: k as u8 });
+            }
+        }
+        for ((link, joint), segment) in self.links.iter_mut().zip(self.joints.iter()).zip(segments)
+        {
+            // The forward pass carries the joint's frame turned so that its
+            // axis is z: `R_urdf = R_core A^T`, so a point `p` of the URDF
+            // frame is `A^T p` in the core's.
+            let align = joint
+                .origin
+                .and_then(|o| origin::unit_axis(&o.axis).ok())
+                .map_or_else(Mat3::identity, |axis| origin::align_z(&axis));
+            let ends = segment.map(|p| align.transpose() * crate::math::vec3(p));
+            let extension = match joint.kind {
+                JointKind::Revolute => 0.0,
+                JointKind::Prismatic => crate::math::max(joint.min.abs(), joint.max.abs()),
+            };
+            let farthest =
+                crate::math::max(crate::math::norm(&ends[0]), crate::math::norm(&ends[1]))
+                    + extension;
+            link.segment = ends;
+            link.capsule_chain = crate::math::max(link.chain, chain_before + farthest);
+            chain_before = link.chain;
+        }
+        self.segments = true;
+        Ok(())
+    }
+
+    /// Whether the links' capsules are segments of their own
+    /// ([`Robot::set_link_segments`]), not their chords.
+    #[inline]
+    pub fn has_link_segments(&self) -> bool {
+        self.segments
+    }
+
+    /// The longest link `k`'s capsule segment is, length units: its own
+    /// segment's length ([`Robot::set_link_segments`]), else its chord's
+    /// longest ([`Robot::longest_link`]).
+    pub fn capsule_length(&self, k: usize) -> f32 {
+        match self.links().get(k) {
+            Some(l) if self.segments => crate::math::norm(&(l.segment[1] - l.segment[0])),
+            Some(l) => l.longest,
+            None => 0.0,
+        }
     }
 
     /// Number of joints `n`.

@@ -143,7 +143,8 @@ pub fn link_pairs<const N: usize>(
         .take(n)
         .enumerate()
     {
-        *m = (frames.pivot(k) + frames.link_end(k)) * 0.5;
+        let (start, end) = frames.capsule(k);
+        *m = (start + end) * 0.5;
         let far_room = far_room + 0.5 * far;
         *room = min(*room, far_room * far_room);
         if k == pressed {
@@ -194,12 +195,8 @@ pub fn link_pairs<const N: usize>(
                 }
                 continue;
             }
-            let pair = closest_points(
-                &frames.pivot(a),
-                &frames.link_end(a),
-                &frames.pivot(b),
-                &frames.link_end(b),
-            );
+            let ((start_a, end_a), (start_b, end_b)) = (frames.capsule(a), frames.capsule(b));
+            let pair = closest_points(&start_a, &end_a, &start_b, &end_b);
             let distance = crate::math::sqrt(pair.distance_sq);
             let radii = r_a + r_b;
             let gap = distance - radii;
@@ -253,16 +250,30 @@ fn add_gradient<const N: usize>(
 ) {
     let mut total = Vec3::zeros();
     let mut moment = Vec3::zeros();
+    let segments = frames.has_segments();
     for (j, ((m, f), s)) in mu.iter_mut().zip(force).zip(sliding).enumerate().rev() {
-        let chord = frames.link_end(j) - frames.pivot(j);
+        let pivot = frames.pivot(j);
+        let chord = frames.link_end(j) - pivot;
         // Reference from this link's end to its pivot, then its own forces.
         moment += chord.cross(&total);
         let beyond = total;
-        moment += chord.cross(s);
+        // A force `f` at the point `start + t (end - start)` of the
+        // capsule's segment has the moment `(start - o) x f + t (end -
+        // start) x f` about the pivot `o`: the chord's start is the pivot.
+        // A prismatic joint moves its whole body (a segment of its own)
+        // along `z`, but only the far end of its chord.
+        let own = if segments {
+            let (start, end) = frames.capsule(j);
+            moment += (start - pivot).cross(f) + (end - start).cross(s);
+            *f
+        } else {
+            moment += chord.cross(s);
+            *s
+        };
         total += f;
         let z = frames.axis(j);
         *m += match robot.joints().get(j).map(|joint| joint.kind) {
-            Some(JointKind::Prismatic) => z.dot(&(beyond + s)),
+            Some(JointKind::Prismatic) => z.dot(&(beyond + own)),
             _ => z.dot(&moment),
         };
     }
@@ -292,11 +303,40 @@ mod tests {
         LinkCapsules::new(robot, &radius, table.checked_rows()).unwrap()
     }
 
+    /// The snake as general joints (its DH rows turned into origins and
+    /// axes), each link's capsule a segment of its own off its chord: up to
+    /// 0.35 from it, across and beyond it (the prismatic link's too).
+    fn snake_with_segments<const N: usize>() -> Robot<N> {
+        let dh = snake::<N>();
+        let mut general = [Joint::revolute(0.0, 1.0, 0.0, -1.0, 1.0, 1.0); 8];
+        let tool = crate::robot::general_from_dh(dh.joints(), &mut general);
+        let mut robot = Robot::new_with_tool(&general, &tool).unwrap();
+        let segments: [[[f32; 3]; 2]; 8] = core::array::from_fn(|k| {
+            let s = 0.1 * (k % 3) as f32;
+            [[-0.2 - s, 0.15, 0.1 * s], [0.3, -0.1 - s, 0.25]]
+        });
+        robot.set_link_segments(&segments).unwrap();
+        robot
+    }
+
     /// The potential's gradient against central differences of the
     /// potential, on random folded configurations where pairs are active.
     #[test]
     fn gradient_matches_finite_differences_of_the_potential() {
-        let robot = snake::<8>();
+        gradient_matches_differences(&snake::<8>());
+    }
+
+    /// The same with capsules round segments of their own: the forces act
+    /// off the chords (and a prismatic joint moves its whole body).
+    #[test]
+    fn gradient_matches_finite_differences_with_link_segments() {
+        let robot = snake_with_segments::<8>();
+        assert!(robot.has_link_segments());
+        gradient_matches_differences(&robot);
+    }
+
+    fn gradient_matches_differences(robot: &Robot<8>) {
+        let robot = robot.clone();
         let caps = capsules(&robot);
         let mut rng = crate::escape::rng::Rng::seeded(3, &[]);
         let mut frames = Frames::<8>::default();
@@ -347,7 +387,12 @@ mod tests {
     /// (from an independent brute-force distance).
     #[test]
     fn rooms_of_two_links_never_add_up_to_more_than_their_gap() {
-        let robot = snake::<8>();
+        rooms_within_gaps(&snake::<8>());
+        rooms_within_gaps(&snake_with_segments::<8>());
+    }
+
+    fn rooms_within_gaps(robot: &Robot<8>) {
+        let robot = robot.clone();
         let caps = capsules(&robot);
         let mut rng = crate::escape::rng::Rng::seeded(5, &[]);
         let mut frames = Frames::<8>::default();
@@ -364,14 +409,13 @@ mod tests {
                     if !caps.is_checked(a, b) {
                         continue;
                     }
-                    // Brute force over both chords.
+                    // Brute force over both capsules' segments.
+                    let ((pa, ea), (pb, eb)) = (frames.capsule(a), frames.capsule(b));
                     let mut best = f32::INFINITY;
                     for i in 0..=200 {
-                        let x = frames.pivot(a)
-                            + (frames.link_end(a) - frames.pivot(a)) * (i as f32 / 200.0);
+                        let x = pa + (ea - pa) * (i as f32 / 200.0);
                         for k in 0..=200 {
-                            let y = frames.pivot(b)
-                                + (frames.link_end(b) - frames.pivot(b)) * (k as f32 / 200.0);
+                            let y = pb + (eb - pb) * (k as f32 / 200.0);
                             best = best.min((x - y).norm());
                         }
                     }

@@ -2,10 +2,12 @@
 //! stay apart, and what they add to the obstacle field every step.
 //!
 //! * [`LinkCapsules`]: each link `k` (from its joint's pivot to the next
-//!   pivot, DH link `k + 1`) is the capsule of radius `r_k` round that chord:
-//!   the segment in the link's frame, the radius a setting. Built once per
-//!   scenario ([`crate::Scenario::set_link_capsules`]); a scenario without
-//!   them has no self-collision checks.
+//!   pivot, DH link `k + 1`) is the capsule of radius `r_k` round that chord,
+//!   or round a segment of its own fixed in its body when the robot has
+//!   them ([`crate::robot::Robot::set_link_segments`]: a URDF link whose
+//!   body lies off its chord); [`crate::kinematics::Frames::capsule`] gives
+//!   either. Built once per scenario ([`crate::Scenario::set_link_capsules`]);
+//!   a scenario without them has no self-collision checks.
 //! * [`pairs`]: which pairs are checked (an allowed-collision matrix, as
 //!   MoveIt's setup assistant builds one): adjacent links, links sharing a
 //!   knuckle, pairs in contact at home or in every sampled configuration,
@@ -77,6 +79,14 @@ pub enum CapsuleError {
         /// The link whose row is wrong.
         link: u8,
     },
+    /// A link segment with an end that is not finite or beyond
+    /// [`MAX_LENGTH`] ([`Robot::set_link_segments`]).
+    BadSegment {
+        /// The link.
+        link: u8,
+    },
+    /// Link segments for a robot of DH rows (only general joints take them).
+    SegmentsNeedGeneralJoints,
 }
 
 impl core::fmt::Display for CapsuleError {
@@ -99,6 +109,15 @@ impl core::fmt::Display for CapsuleError {
                 "link {}: a checked pair names a link that is not after it on the robot",
                 link as u32 + 1
             ),
+            CapsuleError::BadSegment { link } => write!(
+                f,
+                "link {}: the capsule segment's ends must be finite and within {MAX_LENGTH}",
+                link as u32 + 1
+            ),
+            CapsuleError::SegmentsNeedGeneralJoints => write!(
+                f,
+                "link capsule segments are for general joints; a DH robot's capsules are round its chords"
+            ),
         }
     }
 }
@@ -110,9 +129,10 @@ pub struct LinkCapsules<const N: usize> {
     n: usize,
     /// Capsule radius per link, length units.
     radius: [f32; N],
-    /// Per link, the radius of the sphere round its chord's mid-point that
-    /// holds its capsule inflated by [`INFLUENCE`] radii in every
-    /// configuration: half its longest chord plus `(1 + INFLUENCE CLEARANCE_SCALE) r`.
+    /// Per link, the radius of the sphere round its segment's mid-point
+    /// ([`crate::kinematics::Frames::capsule`]) that holds its capsule
+    /// inflated by [`INFLUENCE`] radii in every configuration: half its
+    /// longest segment plus `(1 + INFLUENCE CLEARANCE_SCALE) r`.
     reach: [f32; N],
     /// Per link, the room it may use in one step against the pairs too far
     /// apart to be tested: `INFLUENCE CLEARANCE_SCALE r` (infinity when it has no checked pair).
@@ -175,9 +195,8 @@ impl<const N: usize> LinkCapsules<N> {
             if row & !(robot_links & after) != 0 {
                 return Err(CapsuleError::BadPair { link: link as u8 });
             }
-            let longest = robot.longest_link(link);
             *radius = r;
-            *reach = 0.5 * longest + (1.0 + INFLUENCE * CLEARANCE_SCALE) * r;
+            *reach = 0.5 * robot.capsule_length(link) + (1.0 + INFLUENCE * CLEARANCE_SCALE) * r;
             *checked = row;
         }
         capsules.n = n;
@@ -199,6 +218,20 @@ impl<const N: usize> LinkCapsules<N> {
             }
         }
         Ok(capsules)
+    }
+
+    /// Sizes the broad phase's spheres anew for `robot`'s capsule segments
+    /// (after [`Robot::set_link_segments`]).
+    pub(crate) fn fit(&mut self, robot: &Robot<N>) {
+        for (k, (reach, &r)) in self
+            .reach
+            .iter_mut()
+            .zip(&self.radius)
+            .enumerate()
+            .take(self.n)
+        {
+            *reach = 0.5 * robot.capsule_length(k) + (1.0 + INFLUENCE * CLEARANCE_SCALE) * r;
+        }
     }
 
     /// Whether there are capsules (and so self-collision checks).

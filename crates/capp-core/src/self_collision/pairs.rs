@@ -80,12 +80,8 @@ pub struct PairTable<const N: usize> {
 
 /// Whether the capsules of links `a` and `b` (radii `ra`, `rb`) touch at `frames`.
 fn touching<const N: usize>(frames: &Frames<N>, a: usize, b: usize, ra: f32, rb: f32) -> bool {
-    let c = closest_points(
-        &frames.pivot(a),
-        &frames.link_end(a),
-        &frames.pivot(b),
-        &frames.link_end(b),
-    );
+    let ((start_a, end_a), (start_b, end_b)) = (frames.capsule(a), frames.capsule(b));
+    let c = closest_points(&start_a, &end_a, &start_b, &end_b);
     let radii = ra + rb;
     c.distance_sq <= radii * radii
 }
@@ -107,7 +103,7 @@ impl<const N: usize> PairTable<N> {
             k < robot.len()
                 && radius
                     .get(k)
-                    .is_some_and(|&r| robot.longest_link(k) < 2.0 * r)
+                    .is_some_and(|&r| robot.capsule_length(k) < 2.0 * r)
         };
         for a in 0..n {
             table.status[a][a] = PairStatus::Same;

@@ -20,7 +20,8 @@
 //! only on `x`, and [`crate::step_size`]'s second-order bound `Q_k` (grown
 //! with each `|x_m|`) bounds it along the straight segment from `q`. `J_p x`
 //! is linear in `p` along a link, so a link's worst point is one of its
-//! ends, and linear in `x`, so along each straight segment of the stop it is
+//! ends (of its chord, or of its capsule's own segment when it has one:
+//! [`crate::kinematics::Frames::capsule`]), and linear in `x`, so along each straight segment of the stop it is
 //! largest at one of the segment's ends: the ticks. So the test takes, per
 //! link, the largest first-order travel over the ticks of the stop and
 //! `Q_k` of each joint's largest excursion.
@@ -193,7 +194,8 @@ pub fn stop_margin<const N: usize>(
             {
                 let (w, v) = (wb - wa, bb - ba);
                 let at = |p: Vec3| (w.cross(&p) + v).norm_squared();
-                let worst = max(at(frames.pivot(b)), at(frames.link_end(b)));
+                let (start, end) = frames.capsule(b);
+                let worst = max(at(start), at(end));
                 *rel_sq = max(*rel_sq, worst);
             }
         }
@@ -223,7 +225,10 @@ pub fn stop_margin<const N: usize>(
         .zip(largest[..n].iter().zip(&first_sq[..n]).zip(distance_sq))
         .enumerate()
     {
-        let second = q_sums.link(joint.kind, size, link.chain);
+        let mut second = q_sums.link(joint.kind, size, link.chain);
+        if frames.has_segments() {
+            second = q_sums.at(link.capsule_chain);
+        }
         let travel = crate::math::sqrt(f_sq) + second;
         let travel_sq = travel * travel;
         let mut slid = false;
@@ -294,7 +299,8 @@ fn pair_cleared<const N: usize>(
     fraction: f32,
 ) -> bool {
     let (a, b) = (pair.links[0] as usize, pair.links[1] as usize);
-    let ends = [frames.pivot(b), frames.link_end(b)];
+    let (start, end) = frames.capsule(b);
+    let ends = [start, end];
     let mut reach = [0.0f32; 2];
     for j in a + 1..=b {
         let (Some(joint), Some(&s)) = (robot.joints().get(j), travel.get(j)) else {
@@ -352,6 +358,10 @@ fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) 
         } else {
             q_sums.still(link.chain)
         };
+        // Link b's capsule may reach past its chord.
+        if m == b && robot.has_link_segments() {
+            second = q_sums.at(link.capsule_chain);
+        }
     }
     second
 }
@@ -396,5 +406,14 @@ fn first_order<const N: usize>(
         let end_sq = ev.norm_squared();
         *out = max(*out, max(start_sq, end_sq));
         start_sq = end_sq;
+        if frames.has_segments() {
+            // The capsule's own ends, off the chord.
+            let (start, end) = frames.capsule(j);
+            let ends_sq = max(
+                (w.cross(&start) + b).norm_squared(),
+                (w.cross(&end) + b).norm_squared(),
+            );
+            *out = max(*out, ends_sq);
+        }
     }
 }

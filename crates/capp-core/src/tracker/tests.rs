@@ -378,7 +378,18 @@ impl MovingArm {
     fn random(rng: &mut Rng) -> Self {
         let n = 3 + (range(rng, 0.0, 5.0) as usize);
         let joints = random_chain(rng, n);
-        let robot = crate::Robot::<N>::new(&joints).unwrap();
+        let mut robot = crate::Robot::<N>::new(&joints).unwrap();
+        // Half the arms as general joints whose capsules are segments of
+        // their own, up to 0.5 off their chords and beyond their ends.
+        if rng.uniform() > 0.0 {
+            let mut general = joints.clone();
+            let tool = crate::robot::general_from_dh(&joints, &mut general);
+            robot = crate::Robot::<N>::new_with_tool(&general, &tool).unwrap();
+            let segments: Vec<[[f32; 3]; 2]> = (0..n)
+                .map(|_| [0, 1].map(|_| [0, 1, 2].map(|_| 0.5 * rng.uniform())))
+                .collect();
+            robot.set_link_segments(&segments).unwrap();
+        }
         let limits: Vec<DriveLimits> = joints
             .iter()
             .map(|j| DriveLimits::from_rate(j.max_rate))
@@ -428,10 +439,14 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
             frames,
         } = MovingArm::random(&mut rng);
         let points = |f: &Frames<N>, k: usize| {
+            let (start, end) = f.capsule(k);
             [
                 f.pivot(k),
                 (f.pivot(k) + f.link_end(k)) * 0.5,
                 f.link_end(k),
+                start,
+                (start + end) * 0.5,
+                end,
             ]
         };
         // How far each link's points go, and link b under joints a+1..=b alone.
@@ -455,7 +470,8 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
                 .map(|(m, (q, x))| if m > a { q + x } else { *q })
                 .collect();
             forward_kinematics(&robot, &partial, &mut moved);
-            for (p0, p1) in points(&frames, b).iter().zip(points(&moved, b)) {
+            // A pair's gap is between capsules: the last three points.
+            for (p0, p1) in points(&frames, b).iter().zip(points(&moved, b)).skip(3) {
                 relative = relative.max((p1 - p0).norm());
             }
         }
