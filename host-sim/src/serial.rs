@@ -225,6 +225,12 @@ pub fn plan_on_board<T: Read + Write>(
         tool: problem.tool,
         capsule_radius: scenario.capsules().radii(),
         capsule_rows: scenario.capsules().checked_rows(),
+        // As the host's scenario took them (`Problem::scenario`).
+        capsule_segments: if scenario.capsules().is_on() {
+            &problem.links.segments
+        } else {
+            &[]
+        },
         // The defaults from the rates need no frames; other limits are
         // the host's to the bit.
         drive: if problem.default_drive_limits() {

@@ -102,6 +102,9 @@ pub struct Upload<'a> {
     /// The checked pairs, one row per link as the radii
     /// (`Scenario::capsules().checked_rows()`).
     pub capsule_rows: &'a [u64],
+    /// The capsules' segments when they are not chords, one per capsule, or
+    /// none (`Scenario::set_link_segments`' argument on the host).
+    pub capsule_segments: &'a [[[f32; 3]; 2]],
     /// Each joint's drive limits, or none: the defaults from the rates
     /// (the host's `Scenario::drive_limits()`, so a tracked plan on the
     /// board keeps the host's limits to the bit; each joint's `max_rate` is
@@ -335,6 +338,11 @@ impl<T: Read + Write> Link<T> {
         if upload.capsule_radius.len() != upload.capsule_rows.len() {
             return Err(LinkError::TooLarge("capsule rows (not one per radius)"));
         }
+        if !upload.capsule_segments.is_empty()
+            && upload.capsule_segments.len() != upload.capsule_radius.len()
+        {
+            return Err(LinkError::TooLarge("capsule segments (not one per radius)"));
+        }
         if upload.capsule_radius.len() > capp_proto::MAX_JOINTS {
             return Err(LinkError::TooLarge("capsules"));
         }
@@ -368,7 +376,11 @@ impl<T: Read + Write> Link<T> {
         {
             self.expect_ack(&Command::Capsule {
                 index: i as u8,
-                capsule: capp_proto::Capsule { radius, checked },
+                capsule: capp_proto::Capsule {
+                    radius,
+                    checked,
+                    segment: upload.capsule_segments.get(i).copied(),
+                },
             })?;
         }
         for (i, d) in upload.drive.iter().enumerate() {

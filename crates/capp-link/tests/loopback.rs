@@ -110,6 +110,7 @@ fn plan(budget: usize) -> capp_link::PlanRecord {
         tool: capp_core::robot::Placement::IDENTITY,
         capsule_radius: &[],
         capsule_rows: &[],
+        capsule_segments: &[],
         drive: &[],
         obstacles: &[],
         hulls: &[],

@@ -123,6 +123,11 @@ struct Draft {
     /// checked-pair rows, as `Scenario::set_link_capsules` takes them.
     capsule_radius: Vec<f32, N>,
     capsule_rows: Vec<u64, N>,
+    /// The capsules' segments, when they are not chords (one per capsule, or
+    /// none), as `Scenario::set_link_segments` takes them; and whether a
+    /// capsule came without one.
+    capsule_segments: Vec<[[f32; 3]; 2], N>,
+    capsule_chords: bool,
     /// Drive limits, one per joint or none (the defaults from the rates):
     /// accelerations and jerks, as `Scenario::set_drive_limits` takes them.
     drive_accel: Vec<f32, N>,
@@ -143,6 +148,8 @@ impl Draft {
             start: Vec::new(),
             capsule_radius: Vec::new(),
             capsule_rows: Vec::new(),
+            capsule_segments: Vec::new(),
+            capsule_chords: false,
             drive_accel: Vec::new(),
             drive_jerk: Vec::new(),
             tool: Placement::IDENTITY,
@@ -161,6 +168,8 @@ impl Draft {
             start,
             capsule_radius,
             capsule_rows,
+            capsule_segments,
+            capsule_chords,
             drive_accel,
             drive_jerk,
             tool,
@@ -174,6 +183,8 @@ impl Draft {
         start.clear();
         capsule_radius.clear();
         capsule_rows.clear();
+        capsule_segments.clear();
+        *capsule_chords = false;
         drive_accel.clear();
         drive_jerk.clear();
         *tool = Placement::IDENTITY;
@@ -183,6 +194,8 @@ impl Draft {
     fn clear_capsules(&mut self) {
         self.capsule_radius.clear();
         self.capsule_rows.clear();
+        self.capsule_segments.clear();
+        self.capsule_chords = false;
     }
 
     /// No drive limits: the defaults from the rates.
@@ -281,8 +294,14 @@ impl Draft {
             Command::Capsule { index, capsule } => {
                 let finite = capsule.radius.is_finite();
                 append(&mut d.capsule_radius, *index, capsule.radius, finite)?;
-                // The same length as the radii: it cannot be full.
+                // The same length as the radii: they cannot be full.
                 let _ = d.capsule_rows.push(capsule.checked);
+                match capsule.segment {
+                    Some(segment) => {
+                        let _ = d.capsule_segments.push(segment);
+                    }
+                    None => d.capsule_chords = true,
+                }
             }
             Command::Drive { index, drive } => {
                 let finite = drive.max_accel.is_finite() && drive.max_jerk.is_finite();
@@ -698,6 +717,13 @@ impl<const TXQ: usize> Node<TXQ> {
             plan.scenario
                 .set_link_capsules(&d.capsule_radius, &d.capsule_rows)
                 .map_err(scenario_refusal)?;
+            // Every capsule round a segment of its own, or none.
+            if d.capsule_chords && !d.capsule_segments.is_empty() {
+                return Err((ErrorCode::InvalidCapsules, NO_INDEX));
+            }
+            plan.scenario
+                .set_link_segments(&d.capsule_segments)
+                .map_err(scenario_refusal)?;
         }
         // Bit for bit the host's drive limits (`Scenario::drive_limits`
         // there); none sent, the defaults from the rates.
@@ -981,8 +1007,10 @@ fn scenario_refusal(e: ScenarioError) -> Refusal {
         ScenarioError::Capsules(e) => {
             use capp_core::self_collision::CapsuleError as C;
             let index = match e {
-                C::BadRadius { link } | C::BadPair { link } => link,
-                C::WrongLength { .. } | C::TooManyLinks { .. } => NO_INDEX,
+                C::BadRadius { link } | C::BadPair { link } | C::BadSegment { link } => link,
+                C::WrongLength { .. } | C::TooManyLinks { .. } | C::SegmentsNeedGeneralJoints => {
+                    NO_INDEX
+                }
             };
             (ErrorCode::InvalidCapsules, index)
         }

@@ -590,7 +590,11 @@ fn capsule_commands(radius: &[f32], rows: &[u64]) -> Vec<Command> {
         .enumerate()
         .map(|(i, (&radius, &checked))| Command::Capsule {
             index: i as u8,
-            capsule: capp_proto::Capsule { radius, checked },
+            capsule: capp_proto::Capsule {
+                radius,
+                checked,
+                segment: None,
+            },
         })
         .collect()
 }
@@ -718,7 +722,11 @@ fn bad_link_capsules_are_refused_with_the_link() {
     };
     let capsule = |index: u8, radius: f32, checked: u64| Command::Capsule {
         index,
-        capsule: capp_proto::Capsule { radius, checked },
+        capsule: capp_proto::Capsule {
+            radius,
+            checked,
+            segment: None,
+        },
     };
     // On arrival: a radius that is not a number, a capsule out of order.
     uart.send(&capsule(0, f32::NAN, rows[0]));
@@ -772,6 +780,27 @@ fn bad_link_capsules_are_refused_with_the_link() {
     uart.send(&run);
     let got = outcomes(&exchange(&mut node, &mut uart));
     assert_eq!(got.last(), Some(&(8, ErrorCode::InvalidCapsules, NO_INDEX)));
+    // Segments for a DH robot, and one capsule round a segment among
+    // chords: the load as a whole.
+    let segment = Some([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    for every in [true, false] {
+        uart.send(&Command::Clear(Part::Capsules));
+        for (i, mut c) in capsule_commands(&radius, &rows).into_iter().enumerate() {
+            if let Command::Capsule { capsule, .. } = &mut c {
+                if every || i == 3 {
+                    capsule.segment = segment;
+                }
+            }
+            uart.send(&c);
+        }
+        uart.send(&run);
+        let got = outcomes(&exchange(&mut node, &mut uart));
+        assert_eq!(
+            got.last(),
+            Some(&(8, ErrorCode::InvalidCapsules, NO_INDEX)),
+            "every capsule with a segment: {every}"
+        );
+    }
     // A 33rd capsule does not fit.
     uart.send(&Command::Clear(Part::Capsules));
     for i in 0..33u8 {

@@ -37,7 +37,7 @@ pub use frame::{decode, decode_command, encode, Accumulator, Feed, FrameError, M
 use serde::{Deserialize, Serialize};
 
 /// Protocol version: the first byte of every frame body.
-pub const VERSION: u8 = 11;
+pub const VERSION: u8 = 12;
 /// Most joints a load may hold.
 pub const MAX_JOINTS: usize = 32;
 /// Most obstacles a load may hold.
@@ -296,6 +296,11 @@ pub struct Capsule {
     /// The links this one is checked against: bit `b` set when the pair
     /// (this link, `b`) is checked; only links after this one (`b > index`).
     pub checked: u64,
+    /// The segment the capsule is round, when not the link's chord: its two
+    /// ends in the frame of the body the joint moves, after its motion,
+    /// length units (capp-core's `Robot::set_link_segments`; general joints
+    /// only, and then every capsule of a load has one; since version 12).
+    pub segment: Option<[[f32; 3]; 2]>,
 }
 
 /// One joint's drive limits beyond its rate (capp-core's

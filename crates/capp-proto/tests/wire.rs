@@ -36,18 +36,18 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
 
 #[test]
 fn whole_frames_are_pinned() {
-    // Ping { nonce: 1 }: body 0B 00 01, CRC-32 0x84130665 (zlib), COBS, 00.
+    // Ping { nonce: 1 }: body 0C 00 01, CRC-32 0x815C10E0 (zlib), COBS, 00.
     let mut f = [0u8; MAX_FRAME];
     let n = encode(&Command::Ping { nonce: 1 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x02, 0x0b, 0x06, 0x01, 0x65, 0x06, 0x13, 0x84, 0x00]
+        &[0x02, 0x0c, 0x06, 0x01, 0xe0, 0x10, 0x5c, 0x81, 0x00]
     );
     // Ack { command: 8 }.
     let n = encode(&Reply::Ack { command: 8 }, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x08, 0x0b, 0x01, 0x08, 0x80, 0x8f, 0xd4, 0xe4, 0x00]
+        &[0x08, 0x0c, 0x01, 0x08, 0x05, 0x99, 0x9b, 0xe1, 0x00]
     );
     // Error { command: NO_COMMAND, code: Crc, index: NO_INDEX }.
     let e = Reply::Error {
@@ -58,7 +58,7 @@ fn whole_frames_are_pinned() {
     let n = encode(&e, &mut f).unwrap();
     assert_eq!(
         &f[..n],
-        &[0x0a, 0x0b, 0x02, 0xff, 0x01, 0xff, 0xa6, 0xe4, 0x7a, 0x91, 0x00]
+        &[0x0a, 0x0c, 0x02, 0xff, 0x01, 0xff, 0xb6, 0x38, 0x5a, 0x23, 0x00]
     );
 }
 
@@ -430,11 +430,33 @@ fn every_command_is_pinned() {
             capsule: Capsule {
                 radius: 1.5,
                 checked: (1 << 4) | (1 << 31),
+                segment: None,
             },
         },
         &[
-            0x0C, 0x02, 0x00, 0x00, 0xC0, 0x3F, 0x90, 0x80, 0x80, 0x80, 0x08,
+            0x0C, 0x02, 0x00, 0x00, 0xC0, 0x3F, 0x90, 0x80, 0x80, 0x80, 0x08, 0x00,
         ],
+    );
+    // Round a segment of its own (since version 12): from (0.5, 0, 0) to
+    // (0, 0, -1), after the row.
+    check(
+        &Command::Capsule {
+            index: 2,
+            capsule: Capsule {
+                radius: 1.5,
+                checked: 0,
+                segment: Some([[0.5, 0.0, 0.0], [0.0, 0.0, -1.0]]),
+            },
+        },
+        &cat(&[
+            &[0x0C, 0x02, 0x00, 0x00, 0xC0, 0x3F, 0x00, 0x01],
+            &HALF,
+            &[0; 4],
+            &[0; 4],
+            &[0; 4],
+            &[0; 4],
+            &MINUS_ONE,
+        ]),
     );
     // No pair: one byte.
     check(
@@ -443,9 +465,10 @@ fn every_command_is_pinned() {
             capsule: Capsule {
                 radius: 1.5,
                 checked: 0,
+                segment: None,
             },
         },
-        &[0x0C, 0x1F, 0x00, 0x00, 0xC0, 0x3F, 0x00],
+        &[0x0C, 0x1F, 0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00],
     );
     // Joint 3's drive: 0.5 per second squared, 2.0 per second cubed.
     check(
@@ -476,7 +499,7 @@ fn every_reply_is_pinned() {
             max_obstacles: 64,
             max_waypoints: 16,
         },
-        &[0x00, 0x07, 0x0b, 0x20, 0x40, 0x10],
+        &[0x00, 0x07, 0x0c, 0x20, 0x40, 0x10],
     );
     check(&Reply::Ack { command: 8 }, &[0x01, 0x08]);
     for (i, code) in [
@@ -691,6 +714,7 @@ fn the_largest_messages_fit_a_frame() {
         capsule: Capsule {
             radius: f32::MAX,
             checked: u64::MAX,
+            segment: Some([[f32::MAX; 3]; 2]),
         },
     };
     let n = encode(&capsule, &mut f).unwrap();
@@ -819,6 +843,7 @@ fn sample_commands() -> Vec<Command> {
             capsule: Capsule {
                 radius: 1.5,
                 checked: !((2u64 << i) - 1) & ((1 << 18) - 1),
+                segment: (i % 2 == 1).then_some([[0.25, -0.5, 1.0], [0.0, 2.0, -0.125]]),
             },
         });
     }
