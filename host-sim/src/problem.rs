@@ -371,6 +371,10 @@ impl Problem {
             scenario
                 .set_link_capsules(&self.links.radius, table.checked_rows())
                 .map_err(|e| self.capsule_error(e))?;
+            // As the board takes them: after the capsules (none: chords).
+            scenario
+                .set_link_segments(&self.links.segments)
+                .map_err(|e| self.capsule_error(e))?;
         }
         // The defaults are the core's own (computed in f32, as the board
         // computes them), so host and board plan to the bit.
@@ -419,9 +423,13 @@ impl Problem {
     /// Which pairs of links are checked and why the others are skipped
     /// ([`capp_core::self_collision::pairs`]).
     pub fn pair_table(&self) -> Result<PairTable<MAX_JOINTS>, LoadError> {
-        let robot = self
+        let mut robot = self
             .robot()
             .map_err(|e| self.error(self.lines.robot, format!("robot: {e}")))?;
+        // The capsules as the planner checks them.
+        robot
+            .set_link_segments(&self.links.segments)
+            .map_err(|e| self.capsule_error(ScenarioError::Capsules(e)))?;
         let allowed: Vec<(u8, u8)> = self
             .links
             .allowed

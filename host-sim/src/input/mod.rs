@@ -7,6 +7,7 @@
 //! | [`legacy`] | CAPP.c's `input.dat` (and writes its `joints.dat` records) |
 //! | [`urdf`] | a scenario's `[robot] urdf = "..."`: a URDF robot as general joints |
 //! | [`pivots`] | where a URDF joint's pivot sits on its axis, so each link's chord runs through its body |
+//! | [`link_capsule`] | the one capsule checked per URDF link: round its chord, or round a segment of its own along its body |
 //!
 //! [`Problem::load`] picks the reader by the file's extension ([`is_toml`])
 //! and validates what it read. The types both readers produce ([`Problem`],
@@ -14,6 +15,7 @@
 //! which knows nothing of either format.
 
 pub mod legacy;
+pub mod link_capsule;
 pub mod pivots;
 pub mod scenario_file;
 pub mod urdf;

@@ -607,6 +607,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let robot = file.robot;
     let preset_pips = robot.preset.is_some();
     let mut radii: Vec<Option<f32>> = Vec::new();
+    let mut link_segments: Vec<[[f32; 3]; 2]> = Vec::new();
     // Per joint, the acceleration and jerk limits the file gives (internal
     // units); the others default from the rate once overrides are applied.
     let mut drive_given: Vec<[Option<f64>; 2]> = Vec::new();
@@ -680,6 +681,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             .map_err(|e| err(robot_line, format!("robot.urdf: {e}")))?;
             let n = imported.joints.len();
             radii = imported.radii;
+            link_segments = imported.segments;
             drive_given = vec![[None; 2]; n];
             tool = imported.tool;
             from_urdf = true;
@@ -1256,7 +1258,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let links = crate::problem::LinkGeometry {
         enabled: robot.self_collision.unwrap_or(true),
         radius: radii.iter().map(|r| r.unwrap_or(default_radius)).collect(),
-        segments: Vec::new(),
+        segments: link_segments,
         allowed,
         home: link_home,
     };

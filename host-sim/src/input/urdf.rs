@@ -19,13 +19,14 @@
 //!   capsules are given in the slid frames.
 //! - Self-collision: each link's `<collision>` geometry (primitives, or STL,
 //!   OBJ, Collada meshes fitted with capsules by `capp-urdf`) is enclosed in
-//!   one capsule around the link's chord, the segment the core checks
-//!   ([`super::pivots::enclosing_radius`]). The base's own geometry is not
-//!   checked: the core has no link before the first joint.
+//!   one capsule, round the link's chord or, where that is much smaller,
+//!   round a segment of its own fixed in the body ([`super::link_capsule`]);
+//!   the core checks that capsule. The base's own geometry is not checked:
+//!   the core has no link before the first joint.
 
 use std::path::Path;
 
-use super::pivots::enclosing_radius;
+use super::link_capsule::link_capsule;
 use capp_core::robot::{JointOrigin, Placement};
 use capp_core::{Joint, JointKind};
 use capp_urdf::{Chain, LoadOptions, UrdfError};
@@ -53,6 +54,11 @@ pub struct UrdfRobot {
     /// The capsule radius enclosing each link's collision geometry, length
     /// units; `None` for a link with none.
     pub radii: Vec<Option<f32>>,
+    /// Each link's capsule segment in its joint's (slid) frame after its
+    /// motion, length units ([`super::link_capsule`]): empty when every
+    /// link's capsule is round its chord, else one per link (a link without
+    /// geometry, or whose chord does as well, gives its chord).
+    pub segments: Vec<[[f32; 3]; 2]>,
     /// The home configuration: every joint at zero, or mid-range where zero
     /// is outside its limits.
     pub home: Vec<f32>,
@@ -112,22 +118,38 @@ pub fn import(
             (0.5 * (min + max)) as f32
         });
     }
-    // Link k's chord, in joint k's (slid) frame.
-    let radii = (0..n)
-        .map(|k| {
-            let (pivot, end) = super::pivots::chord(&chain, &[], k);
-            chain
-                .bodies
-                .get(k + 1)
-                .and_then(|body| enclosing_radius(body, &pivot, &end))
-                .map(|r| (r * per_metre) as f32)
-        })
-        .collect();
+    // Link k's capsule, in joint k's (slid) frame: round its chord, or
+    // round a segment of its own where that is much smaller.
+    let mut radii = Vec::with_capacity(n);
+    let mut segments = Vec::with_capacity(n);
+    let mut own_segments = false;
+    let scaled = |p: &nalgebra::Point3<f64>| [p.x, p.y, p.z].map(|x| (x * per_metre) as f32);
+    for k in 0..n {
+        let (pivot, end) = super::pivots::chord(&chain, &[], k);
+        let capsule = chain
+            .bodies
+            .get(k + 1)
+            .and_then(|body| link_capsule(body, &pivot, &end));
+        radii.push(capsule.map(|(c, _)| (c.radius * per_metre) as f32));
+        let (a, b) = match capsule {
+            Some((c, own)) => {
+                own_segments |= own;
+                (c.a, c.b)
+            }
+            None => (pivot, end),
+        };
+        segments.push([scaled(&a), scaled(&b)]);
+    }
+    if !own_segments {
+        // Every capsule round its chord: the core's chords, to the bit.
+        segments.clear();
+    }
     Ok(UrdfRobot {
         names: chain.joints.iter().map(|j| j.name.clone()).collect(),
         tool: placement(&chain.tool, per_metre),
         joints,
         radii,
+        segments,
         home,
         chain,
         pivot_slide,
