@@ -103,7 +103,7 @@ impl<const N: usize> PairTable<N> {
             k < robot.len()
                 && radius
                     .get(k)
-                    .is_some_and(|&r| robot.capsule_length(k) < 2.0 * r)
+                    .is_some_and(|&r| robot.longest_link(k) < 2.0 * r)
         };
         for a in 0..n {
             table.status[a][a] = PairStatus::Same;
