@@ -658,7 +658,9 @@ impl<const N: usize> Robot<N> {
     /// goes back to the chords. Only general joints take segments (a DH
     /// robot keeps its chords, and its plans their bits).
     ///
-    /// On error the robot keeps its chords.
+    /// On error the robot keeps its chords. Never inlined: called once per
+    /// load, it need not grow the load's code on the board.
+    #[inline(never)]
     pub fn set_link_segments(
         &mut self,
         segments: &[[[f32; 3]; 2]],
