@@ -792,11 +792,7 @@ impl Geometry {
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
             links: Links::new(problem),
-            longest: link_reach(
-                &problem.joints,
-                &problem.tool,
-                &problem.links.segments,
-            ),
+            longest: link_reach(&problem.joints, &problem.tool, &problem.links.segments),
         }
     }
 
