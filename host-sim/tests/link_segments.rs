@@ -340,3 +340,80 @@ fn without_segments_the_gaps_are_the_chords_exactly() {
         );
     }
 }
+
+/// `capp robot`'s report and `capp acm`'s name the segment each link's
+/// capsule is round, and the report's "misses this body" note weighs the
+/// capsule checked: the UR5's upper arm keeps its note while its radius is
+/// the chord's (0.2121 m against a body of 0.1006 m), and loses it with a
+/// segment through the body and a radius to match.
+#[test]
+fn the_reports_name_the_segments() {
+    let mut problem = scenario("ur5_table.toml");
+    let n = problem.joints.len();
+    let chords = capp_sim::robot_report::report(&problem).unwrap();
+    assert!(chords.contains("the chord misses this body"), "{chords}");
+    assert!(!chords.contains("segment a"), "{chords}");
+    problem.links.segments = vec![[[0.0, 0.0, 0.0], [0.0, 0.0, 0.1]]; n];
+    problem.links.segments[1] = [[0.0, 0.0, 0.0], [0.425, 0.0, 0.0]];
+    let report = capp_sim::robot_report::report(&problem).unwrap();
+    let upper = report
+        .split("link 2 (after joint \"shoulder_lift_joint\")")
+        .nth(1)
+        .and_then(|rest| rest.split("  link 3 ").next())
+        .unwrap_or_else(|| panic!("{report}"));
+    assert!(
+        upper.contains("segment a 0.0000 0.0000 0.0000  b 0.4250 0.0000 0.0000 (m, in joint \"shoulder_lift_joint\"'s frame), radius 0.2121 m"),
+        "{upper}"
+    );
+    assert!(
+        upper.contains("the segment misses this body: its capsule is 2.1 times as thick"),
+        "{upper}"
+    );
+    problem.links.radius[1] = 0.11;
+    let report = capp_sim::robot_report::report(&problem).unwrap();
+    assert!(!report.contains("segment misses"), "{report}");
+    assert!(!report.contains("chord up to"), "{report}");
+    let acm = capp_sim::acm::report(&problem).unwrap();
+    assert!(acm.contains("capsules (each link's segment"), "{acm}");
+}
+
+/// The viewer's `RUN` carries each frame's capsule segments (`null`
+/// without segments, the chords being the frame origins it has), the
+/// same the checker measures (to the page's 4 decimals).
+#[test]
+fn the_viewer_draws_the_segments_checked() {
+    use capp_sim::render::viewer::run_json;
+    use capp_sim::trajectory::Trajectory;
+    let field = |json: &str| -> Option<Vec<f64>> {
+        let rest = json.split("\"link_segments\": ").nth(1).unwrap();
+        let value = rest.split(",\n").next().unwrap();
+        (value != "null").then(|| {
+            value
+                .trim_matches(['[', ']'])
+                .split(',')
+                .map(|x| x.parse().unwrap())
+                .collect()
+        })
+    };
+    let q = [FRAC_PI_2, 0.4, -0.7];
+    let still = Trajectory::still(&q);
+    assert_eq!(field(&run_json(&three_link_arm(Vec::new()), &still)), None);
+    let problem = three_link_arm(vec![
+        [[0.5, 0.0, 0.0], [0.5, 0.0, 0.8]],
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+        [[0.0, 0.3, 0.0], [0.6, 0.3, 0.0]],
+    ]);
+    let drawn = field(&run_json(&problem, &still)).unwrap();
+    let checked: Vec<f64> = Geometry::new(&problem)
+        .pose(&q)
+        .capsules
+        .iter()
+        .flatten()
+        .flatten()
+        .copied()
+        .collect();
+    assert_eq!(drawn.len(), 18);
+    for (d, c) in drawn.iter().zip(&checked) {
+        assert!((d - c).abs() < 1e-4, "{drawn:?} against {checked:?}");
+    }
+}
