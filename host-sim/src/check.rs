@@ -5,9 +5,9 @@
 //! [`crate::geometry`], the independent `f64` model of the robot and
 //! obstacles (DH products in `f64`, each obstacle evaluated directly from
 //! eq. 25, with the margin of the point's kind; link capsules' segments,
-//! chords or the scenario's link segments, segment to segment). Avoidance points are every frame origin `o_1..o_n` and
-//! `points_per_link` interior points per link, at every row of the
-//! trajectory.
+//! chords or the scenario's link segments, segment to segment). Avoidance
+//! points are every frame origin `o_1..o_n` and `points_per_link` interior
+//! points per link (on the chords), at every row of the trajectory.
 //!
 //! Per row: finite values, joint limits, recorded end-effector position against
 //! the exact one, clearance of every point from every obstacle, and, when the

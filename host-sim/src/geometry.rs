@@ -327,8 +327,8 @@ fn motion(kind: JointKind, axis: [f32; 3], q: f64) -> M4 {
     m
 }
 
-/// The longest chord each link can have, length units (`l_k` of the module
-/// docs): DH `sqrt(a^2 + d^2)` (`d` at its largest extension for a
+/// The longest chord each link can have, length units (`chord_k` of the
+/// module docs): DH `sqrt(a^2 + d^2)` (`d` at its largest extension for a
 /// prismatic joint); a general link the distance to the next joint's
 /// origin (or the tool's), plus a prismatic joint's largest extension; the
 /// tool lengthens the last link.
