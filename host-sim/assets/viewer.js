@@ -176,8 +176,10 @@
       links.push(link);
     }
   }
-  // The link capsules: link i is the chord from origin i to origin i + 1,
-  // a see-through tube of radius RUN.capsules[i] with a ball at each end.
+  // The link capsules: link i is a see-through tube of radius
+  // RUN.capsules[i] with a ball at each end, round its segment: per frame
+  // RUN.link_segments (six numbers a link) when given, else the chord from
+  // origin i to origin i + 1.
   // Hidden until the checkbox (or `c`, or #capsules in the URL) shows them.
   const capsules = new THREE.Group();
   const capsuleMaterial = new THREE.MeshLambertMaterial({
@@ -251,9 +253,16 @@
       link.scale.set(1, length, 1);
     }
     const close = RUN.closest_links[f];
+    const segments = RUN.link_segments, stride = 6 * (J - 1);
     tubes.forEach((t, i) => {
-      a.copy(joints[i].position);
-      b.copy(joints[i + 1].position);
+      if (segments) {
+        const s = stride * f + 6 * i;
+        a.set(segments[s], segments[s + 1], segments[s + 2]);
+        b.set(segments[s + 3], segments[s + 4], segments[s + 5]);
+      } else {
+        a.copy(joints[i].position);
+        b.copy(joints[i + 1].position);
+      }
       placeCapsule(t.parts, a, b, t.radius);
       const red = close !== null && (close[0] === i + 1 || close[1] === i + 1);
       t.parts.forEach((m) => { m.material = red ? closeMaterial : capsuleMaterial; });

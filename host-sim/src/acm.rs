@@ -19,10 +19,16 @@ pub fn report(problem: &Problem) -> Result<String, LoadError> {
             "self-collision is off for this scenario ([robot] self_collision = false): no pair is checked"
         );
     }
-    let _ = writeln!(
-        out,
-        "\ncapsules (the chord from each joint's pivot to the next, DH link k after joint k):"
-    );
+    let _ = match problem.links.segments.is_empty() {
+        true => writeln!(
+            out,
+            "\ncapsules (the chord from each joint's pivot to the next, DH link k after joint k):"
+        ),
+        false => writeln!(
+            out,
+            "\ncapsules (each link's segment, fixed in the body joint k moves, link k after joint k):"
+        ),
+    };
     for (k, r) in problem.links.radius.iter().enumerate() {
         let _ = writeln!(out, "  {:<28} radius {r} {unit}", problem.link_label(k));
     }

@@ -4,10 +4,10 @@
 //! capsules: every pose, clearance and capsule gap comes from
 //! [`crate::geometry`], the independent `f64` model of the robot and
 //! obstacles (DH products in `f64`, each obstacle evaluated directly from
-//! eq. 25, with the margin of the point's kind; link chords segment to
-//! segment). Avoidance points are every frame origin `o_1..o_n` and
-//! `points_per_link` interior points per link, at every row of the
-//! trajectory.
+//! eq. 25, with the margin of the point's kind; link capsules' segments,
+//! chords or the scenario's link segments, segment to segment). Avoidance
+//! points are every frame origin `o_1..o_n` and `points_per_link` interior
+//! points per link (on the chords), at every row of the trajectory.
 //!
 //! Per row: finite values, joint limits, recorded end-effector position against
 //! the exact one, clearance of every point from every obstacle, and, when the
@@ -46,7 +46,7 @@ use std::fmt;
 use capp_core::JointKind;
 
 use crate::drive_check::{self, DriveReport};
-use crate::geometry::{forward, Geometry, LinkGap};
+use crate::geometry::{Geometry, LinkGap};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -406,7 +406,7 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
             problem.links.radius[b] as f64,
         );
         format!(
-            "{} and {} overlap: their capsules are {:.4} {unit} into each other (chords {:.4} {unit} apart, radii {ra} + {rb})",
+            "{} and {} overlap: their capsules are {:.4} {unit} into each other (segments {:.4} {unit} apart, radii {ra} + {rb})",
             problem.link_label(a),
             problem.link_label(b),
             -pair.gap,
@@ -482,7 +482,8 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
                 }
             }
         }
-        let (origins, end) = forward(problem, &row.q);
+        let pose = geometry.pose(&row.q);
+        let end = pose.end;
         if let Some(p) = row.position {
             let e = ((p[0] - end[0][3]).powi(2)
                 + (p[1] - end[1][3]).powi(2)
@@ -498,7 +499,7 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
                 );
             }
         }
-        geometry.pairs(&origins, |c, id, o| {
+        geometry.pairs(&pose.origins, |c, id, o| {
             if report.min_clearance.is_none_or(|m| c < m.0) {
                 report.min_clearance = Some((c, row.step, id + 1, o + 1));
             }
@@ -517,7 +518,7 @@ pub fn check_with(problem: &Problem, geometry: &Geometry, trajectory: &Trajector
             }
             true
         });
-        let gaps = geometry.link_gaps(&origins);
+        let gaps = geometry.link_gaps(&pose);
         if let Some(pair) = geometry.worst_gap(&gaps) {
             let found = LinkApproach {
                 pair,

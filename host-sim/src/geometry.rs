@@ -25,13 +25,17 @@
 //! origin `o_1..o_n` and `points_per_link` interior points per link.
 //!
 //! Self-collision: link `k` (0-based, DH link `k + 1`) is the capsule of
-//! radius `r_k` round the chord `o_k -> o_{k+1}` (the last ends at the end
-//! effector). For every pair of links the scenario checks
-//! ([`Problem::pair_table`], the scenario's definition, as the margins are),
-//! the capsules' *gap* is
+//! radius `r_k` round its segment `s_k` ([`Pose::capsules`]): the chord
+//! `o_k -> o_{k+1}` (the last ends at the end effector), or, when the
+//! scenario gives link segments (`Problem::links`' `segments`, general
+//! joints only: [`link_segment`]), the segment `T_k a_k -> T_k b_k` fixed
+//! in the body joint `k` moves (`T_k`, its frame after the motion,
+//! [`joint_frames`]; `a_k`, `b_k` in length units). For every pair of links
+//! the scenario checks ([`Problem::pair_table`], the scenario's definition,
+//! as the margins are), the capsules' *gap* is
 //!
 //! ```text
-//! gap_ab = dist(chord_a, chord_b) - r_a - r_b      (length units; < 0: overlap)
+//! gap_ab = dist(s_a, s_b) - r_a - r_b      (length units; < 0: overlap)
 //! ```
 //!
 //! with [`segment_distance`], this module's own `f64` segment-to-segment
@@ -40,16 +44,34 @@
 //! endpoint-to-segment distances; no code of the planner's).
 //!
 //! Between two configurations `a`, `b` on the straight joint-space segment
-//! `q(t) = a + t (b - a)`, no point of link `k` travels farther than
+//! `q(t) = a + t (b - a)`, no point of link `k`'s capsule segment (nor of
+//! its chord) travels farther than
 //!
 //! ```text
 //! delta_k = sum_{j <= k} |b_j - a_j| w_jk,
 //! w_jk = l_j + ... + l_k (revolute joint j),  1 (prismatic joint j)
 //! ```
 //!
-//! (`l_i` the longest chord link `i` can have: `sqrt(a_i^2 + d_i^2)`, `d_i`
-//! at its largest extension for a prismatic joint; [`longest_links`]), so a pair's gap moves
-//! by at most `delta_a + delta_b` over the segment and stays at or above
+//! with `l_i` how far from pivot `o_i` a point of link `i`'s capsule
+//! segment can lie ([`link_reach`]):
+//!
+//! ```text
+//! l_i = chord_i                                          (a chord)
+//! l_i = max(chord_i, max(|a_i|, |b_i|) + slide_i)        (a segment a_i -> b_i)
+//! ```
+//!
+//! `chord_i` the longest chord link `i` can have (`sqrt(a_i^2 + d_i^2)`,
+//! `d_i` at its largest extension for a prismatic joint; a general joint's
+//! distance to the next pivot, plus its largest extension when prismatic:
+//! [`longest_links`]), `|a_i|` measured from the origin of `T_i`, which is
+//! the pivot for a revolute joint and at most `slide_i`, the joint's
+//! largest `|q|`, from it for a prismatic one (`slide_i = 0` when
+//! revolute). A point of link `k` is within `l_j + ... + l_k` of pivot
+//! `o_j` (the chords to `o_k`, then its reach from there), and joint `j`
+//! turns about an axis through `o_j`, whence `w_jk`. A segment end may lie
+//! farther from its pivot than the chord is long, so the chord alone would
+//! not bound it. A pair's gap therefore moves by at most `delta_a + delta_b`
+//! over the segment and stays at or above
 //! `(gap(a) + gap(b) - delta_a - delta_b) / 2` all along it.
 //! [`Geometry::sweep_links`] bisects the segment wherever that bound does
 //! not keep a pair apart, until neither link of such a pair moves more than
@@ -107,6 +129,18 @@ pub fn forward(problem: &Problem, q: &[f64]) -> (Vec<[f64; 3]>, M4) {
 /// frame origin before its motion; DH: `o_0 = 0`, `o_1`, ...) and the end
 /// effector: link `k` runs from point `k` to point `k + 1`.
 pub fn forward_chain(joints: &[Joint], tool: &Placement, q: &[f64]) -> (Vec<[f64; 3]>, M4) {
+    walk_chain(joints, tool, q, |_, _| {})
+}
+
+/// [`forward_chain`], calling `body(j, T_j)` with each general joint's
+/// frame after its motion (the frame of the body it moves; never for a DH
+/// row).
+fn walk_chain(
+    joints: &[Joint],
+    tool: &Placement,
+    q: &[f64],
+    mut body: impl FnMut(usize, &M4),
+) -> (Vec<[f64; 3]>, M4) {
     let mut t: M4 = [
         [1.0, 0.0, 0.0, 0.0],
         [0.0, 1.0, 0.0, 0.0],
@@ -118,7 +152,7 @@ pub fn forward_chain(joints: &[Joint], tool: &Placement, q: &[f64]) -> (Vec<[f64
     if !general {
         origins.push([0.0; 3]);
     }
-    for (joint, &qj) in joints.iter().zip(q) {
+    for (j, (joint, &qj)) in joints.iter().zip(q).enumerate() {
         match joint.origin {
             None => {
                 let (theta, d) = match joint.kind {
@@ -132,6 +166,7 @@ pub fn forward_chain(joints: &[Joint], tool: &Placement, q: &[f64]) -> (Vec<[f64
                 t = mul(&t, &homogeneous(&origin.placement));
                 origins.push([t[0][3], t[1][3], t[2][3]]);
                 t = mul(&t, &motion(joint.kind, origin.axis, qj));
+                body(j, &t);
             }
         }
     }
@@ -144,6 +179,65 @@ pub fn forward_chain(joints: &[Joint], tool: &Placement, q: &[f64]) -> (Vec<[f64
         }
     }
     (origins, t)
+}
+
+/// The arm at one configuration, `f64`: what the obstacle and
+/// self-collision checks read ([`pose`], [`Geometry::pose`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    /// The joints' pivots and the end effector, `o_0..o_n`, world, length
+    /// units ([`forward_chain`]).
+    pub origins: Vec<[f64; 3]>,
+    /// The end effector's transform (`T_n tool`).
+    pub end: M4,
+    /// Each link's capsule segment, world, length units (the module docs'
+    /// `s_k`): the chord `o_k -> o_{k+1}`, or the link's segment
+    /// ([`link_segment`]) carried by its body's frame, `T_k a -> T_k b`.
+    pub capsules: Vec<[V3; 2]>,
+}
+
+/// The arm of `problem` at `q` ([`Pose`]).
+pub fn pose(problem: &Problem, q: &[f64]) -> Pose {
+    pose_chain(&problem.joints, &problem.tool, &problem.links.segments, q)
+}
+
+/// [`pose`] for a bare chain, tool and link segments (`Problem::links`'
+/// `segments`: empty, or per link its segment in its body's frame).
+pub fn pose_chain(
+    joints: &[Joint],
+    tool: &Placement,
+    segments: &[[[f32; 3]; 2]],
+    q: &[f64],
+) -> Pose {
+    let mut placed: Vec<Option<[V3; 2]>> = vec![None; joints.len()];
+    let (origins, end) = walk_chain(joints, tool, q, |j, t| {
+        if let Some([a, b]) = link_segment(joints, segments, j) {
+            placed[j] = Some([transform(t, a), transform(t, b)]);
+        }
+    });
+    let capsules = origins
+        .windows(2)
+        .zip(placed)
+        .map(|(chord, segment)| segment.unwrap_or([chord[0], chord[1]]))
+        .collect();
+    Pose {
+        origins,
+        end,
+        capsules,
+    }
+}
+
+/// Link `k`'s capsule segment in its body's frame (`T_k`, after joint `k`'s
+/// motion), length units, when it has one: `segments[k]` for a general
+/// joint; `None` for a chord (no segments, or a DH row).
+pub fn link_segment(joints: &[Joint], segments: &[[[f32; 3]; 2]], k: usize) -> Option<[V3; 2]> {
+    joints.get(k)?.origin?;
+    segments.get(k).map(|s| s.map(|p| p.map(f64::from)))
+}
+
+/// `T p`: the point `p` of a frame `t` in world coordinates.
+fn transform(t: &M4, p: V3) -> V3 {
+    [0, 1, 2].map(|i| t[i][3] + (0..3).map(|k| t[i][k] * p[k]).sum::<f64>())
 }
 
 /// Each general joint's frame after its motion, world (`T_j` of
@@ -178,10 +272,7 @@ pub fn collision_capsules(problem: &Problem, q: &[f64]) -> Vec<[f64; 7]> {
     let frames = joint_frames(&problem.joints, q);
     let world = homogeneous(&Placement::IDENTITY);
     let s = urdf.per_metre;
-    let place = |t: &M4, p: &nalgebra::Point3<f64>| {
-        let p = [p.x * s, p.y * s, p.z * s];
-        [0, 1, 2].map(|i| t[i][3] + (0..3).map(|k| t[i][k] * p[k]).sum::<f64>())
-    };
+    let place = |t: &M4, p: &nalgebra::Point3<f64>| transform(t, [p.x * s, p.y * s, p.z * s]);
     urdf.bodies
         .iter()
         .zip(std::iter::once(&world).chain(&frames))
@@ -236,8 +327,8 @@ fn motion(kind: JointKind, axis: [f32; 3], q: f64) -> M4 {
     m
 }
 
-/// The longest chord each link can have, length units (`l_k` of the module
-/// docs): DH `sqrt(a^2 + d^2)` (`d` at its largest extension for a
+/// The longest chord each link can have, length units (`chord_k` of the
+/// module docs): DH `sqrt(a^2 + d^2)` (`d` at its largest extension for a
 /// prismatic joint); a general link the distance to the next joint's
 /// origin (or the tool's), plus a prismatic joint's largest extension; the
 /// tool lengthens the last link.
@@ -272,6 +363,31 @@ pub fn longest_links(joints: &[Joint], tool: &Placement) -> Vec<f64> {
                     (j.a as f64).hypot(d) + tool
                 }
             }
+        })
+        .collect()
+}
+
+/// How far from its joint's pivot any point of each link's capsule
+/// segment can lie, length units (`l_k` of the module docs): the longest
+/// chord ([`longest_links`]), or for a link with a segment `a -> b`
+/// ([`link_segment`]) the larger of that and `max(|a|, |b|)` plus a
+/// prismatic joint's largest extension (`a`, `b` are measured from the
+/// joint's frame after its motion, which a slide moves off the pivot).
+pub fn link_reach(joints: &[Joint], tool: &Placement, segments: &[[[f32; 3]; 2]]) -> Vec<f64> {
+    let norm = |p: V3| dot(p, p).sqrt();
+    longest_links(joints, tool)
+        .into_iter()
+        .enumerate()
+        .map(|(k, chord)| match link_segment(joints, segments, k) {
+            Some([a, b]) => {
+                let joint = &joints[k];
+                let slide = match joint.kind {
+                    JointKind::Revolute => 0.0,
+                    JointKind::Prismatic => (joint.min.abs() as f64).max(joint.max.abs() as f64),
+                };
+                chord.max(norm(a).max(norm(b)) + slide)
+            }
+            None => chord,
         })
         .collect()
 }
@@ -579,8 +695,8 @@ pub const SWEEP_FRACTION: f64 = 0.25;
 /// The capsules' gap of one checked pair of links.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LinkGap {
-    /// The chords' distance less both radii, length units; negative when
-    /// the capsules overlap.
+    /// The capsule segments' distance less both radii, length units;
+    /// negative when the capsules overlap.
     pub gap: f64,
     /// The two links, 0-based (DH links `a + 1`, `b + 1`), the lower first.
     pub links: (usize, usize),
@@ -616,13 +732,17 @@ struct Links {
 pub struct Geometry {
     joints: Vec<Joint>,
     tool: Placement,
+    /// Each link's capsule segment in its body's frame, or empty: chords
+    /// (`Problem::links`' `segments`).
+    segments: Vec<[[f32; 3]; 2]>,
     shapes: Vec<Shape>,
     interior: usize,
     margins: [f64; 2],
     /// `None` when self-collision is off (or the scenario's capsules are
     /// invalid: [`Problem::validate`] refuses those).
     links: Option<Links>,
-    /// The longest chord each link can have (`l_k` of the module docs).
+    /// How far from its pivot a point of each link's capsule can lie
+    /// (`l_k` of the module docs, [`link_reach`]).
     longest: Vec<f64>,
 }
 
@@ -643,10 +763,12 @@ impl Links {
         })
     }
 
-    /// The gap of checked pair `i` at `origins`.
-    fn gap(&self, origins: &[[f64; 3]], i: usize) -> f64 {
+    /// The gap of checked pair `i` at `pose`: its capsule segments'
+    /// distance less both radii.
+    fn gap(&self, pose: &Pose, i: usize) -> f64 {
         let (a, b) = self.pairs[i];
-        let d = segment_distance(origins[a], origins[a + 1], origins[b], origins[b + 1]);
+        let ([a0, a1], [b0, b1]) = (pose.capsules[a], pose.capsules[b]);
+        let d = segment_distance(a0, a1, b0, b1);
         d.distance - self.radius[a] - self.radius[b]
     }
 }
@@ -658,6 +780,7 @@ impl Geometry {
         Geometry {
             joints: problem.joints.clone(),
             tool: problem.tool,
+            segments: problem.links.segments.clone(),
             shapes: {
                 let hulls = hull_polytopes(problem);
                 problem
@@ -669,13 +792,18 @@ impl Geometry {
             interior: avoid.points_per_link as usize,
             margins: [avoid.joint_margin as f64, avoid.link_margin as f64],
             links: Links::new(problem),
-            longest: longest_links(&problem.joints, &problem.tool),
+            longest: link_reach(&problem.joints, &problem.tool, &problem.links.segments),
         }
     }
 
-    /// Frame origins `o_0..o_n` and the end transform at `q`.
-    pub fn forward(&self, q: &[f64]) -> (Vec<[f64; 3]>, M4) {
-        forward_chain(&self.joints, &self.tool, q)
+    /// The arm at `q`: frame origins, end transform and link capsules.
+    pub fn pose(&self, q: &[f64]) -> Pose {
+        pose_chain(&self.joints, &self.tool, &self.segments, q)
+    }
+
+    /// Frame origins `o_0..o_n` at `q` (all the obstacle checks read).
+    fn origins(&self, q: &[f64]) -> Vec<[f64; 3]> {
+        forward_chain(&self.joints, &self.tool, q).0
     }
 
     /// Calls `f(c, point, obstacle)` with `C - 1` of every avoidance point /
@@ -712,7 +840,7 @@ impl Geometry {
     /// The closest pair at `q`; `None` without obstacles. A NaN clearance
     /// counts as the closest (a collision).
     pub fn clearance(&self, q: &[f64]) -> Option<Closest> {
-        let (origins, _) = self.forward(q);
+        let origins = self.origins(q);
         let mut closest: Option<Closest> = None;
         self.pairs(&origins, |value, point, obstacle| {
             if closest.is_none_or(|c| value < c.value || value.is_nan()) {
@@ -730,7 +858,7 @@ impl Geometry {
     /// Whether every pair at `q` has `C - 1 > margin` (stops at the first that
     /// has not; NaN is not clear).
     pub fn is_clear(&self, q: &[f64], margin: f64) -> bool {
-        let (origins, _) = self.forward(q);
+        let origins = self.origins(q);
         let mut clear = true;
         self.pairs(&origins, |value, _, _| {
             clear = value > margin;
@@ -751,10 +879,10 @@ impl Geometry {
     }
 
     /// The gap of every checked pair (in [`Geometry::checked_pairs`]'
-    /// order) of the configuration whose frame origins are `origins`.
-    pub fn link_gaps(&self, origins: &[[f64; 3]]) -> Vec<f64> {
+    /// order) of the arm at `pose` ([`Geometry::pose`]).
+    pub fn link_gaps(&self, pose: &Pose) -> Vec<f64> {
         match &self.links {
-            Some(l) => (0..l.pairs.len()).map(|i| l.gap(origins, i)).collect(),
+            Some(l) => (0..l.pairs.len()).map(|i| l.gap(pose, i)).collect(),
             None => Vec::new(),
         }
     }
@@ -776,34 +904,35 @@ impl Geometry {
     /// checked.
     pub fn closest_link_pair(&self, q: &[f64]) -> Option<LinkGap> {
         self.links.as_ref()?;
-        let (origins, _) = self.forward(q);
-        self.worst_gap(&self.link_gaps(&origins))
+        self.worst_gap(&self.link_gaps(&self.pose(q)))
     }
 
     /// Whether `q` is free: every avoidance point has `C - 1 > 0` and every
     /// checked pair of capsules a gap `> 0` (NaN is not free).
     pub fn is_free(&self, q: &[f64]) -> bool {
-        let (origins, _) = self.forward(q);
+        let pose = self.pose(q);
         let mut clear = true;
-        self.pairs(&origins, |value, _, _| {
+        self.pairs(&pose.origins, |value, _, _| {
             clear = value > 0.0;
             clear
         });
         clear
             && match &self.links {
-                Some(l) => (0..l.pairs.len()).all(|i| l.gap(&origins, i) > 0.0),
+                Some(l) => (0..l.pairs.len()).all(|i| l.gap(&pose, i) > 0.0),
                 None => true,
             }
     }
 
-    /// Per link, a bound on how far any point of it travels along the
-    /// straight joint-space segment `a -> b` (the module docs' `delta_k`).
+    /// Per link, a bound on how far any point of its capsule segment (or
+    /// its chord) travels along the straight joint-space segment `a -> b`
+    /// (the module docs' `delta_k`), length units.
     pub fn link_motion(&self, a: &[f64], b: &[f64]) -> Vec<f64> {
         let n = self.joints.len();
         let mut delta = vec![0.0; n];
         for (j, joint) in self.joints.iter().enumerate() {
             let dq = (b[j] - a[j]).abs();
-            // The lever of joint j on links j..: the chords from its pivot out.
+            // The lever of joint j on links j..: the chords from its pivot
+            // out, the last one's reach to its capsule's farthest point.
             let mut lever = 0.0;
             for (k, d) in delta.iter_mut().enumerate().skip(j) {
                 lever += self.longest[k];
@@ -915,12 +1044,12 @@ impl Bisection<'_> {
             .zip(self.b)
             .map(|(x, y)| x + tm * (y - x))
             .collect();
-        let (origins, _) = self.geometry.forward(&q);
+        let pose = self.geometry.pose(&q);
         self.sweep.samples += 1;
         let mut left = Vec::with_capacity(doubt.len());
         let mut right = Vec::with_capacity(doubt.len());
         for &(i, g0, g1) in &doubt {
-            let gm = self.links.gap(&origins, i);
+            let gm = self.links.gap(&pose, i);
             if self
                 .sweep
                 .worst

@@ -1,7 +1,8 @@
 //! `capp robot SCENARIO`: the robot as the planner sees it. The chain (a DH
 //! table, or general joints with their origins as `xyz` and `rpy`, axes and
 //! the tool), every joint's limits and rate, the reach bound, and per link
-//! the capsule the planner checks (its chord and radius) with, for a URDF
+//! the capsule the planner checks (its chord, or its segment in its body's
+//! frame when the scenario gives one, and its radius) with, for a URDF
 //! robot, the capsules fitted to the link's `<collision>` geometry that the
 //! radius encloses.
 
@@ -10,6 +11,7 @@ use std::fmt::Write;
 use capp_core::robot::Placement;
 use capp_core::JointKind;
 
+use crate::geometry::link_segment;
 use crate::problem::{LoadError, Problem};
 
 /// `(x, y, z)` with 4 decimals.
@@ -122,21 +124,38 @@ pub fn report(problem: &Problem) -> Result<String, LoadError> {
         "\nreach bound: {:.4} {unit} (the longest the arm can stretch from the base)",
         robot.reach()
     );
-    let _ = writeln!(
-        out,
-        "\nlink capsules (the chord from each joint's pivot to the next, or to the end effector; the radius the self-collision checks use):"
-    );
+    let _ = match problem.links.segments.is_empty() {
+        true => writeln!(
+            out,
+            "\nlink capsules (the chord from each joint's pivot to the next, or to the end effector; the radius the self-collision checks use):"
+        ),
+        false => writeln!(
+            out,
+            "\nlink capsules (each link's segment, fixed in the frame of the body its joint moves, and the radius the self-collision checks use):"
+        ),
+    };
     // A link capsule this many times the body's thickest fitted capsule is
-    // reported as round a chord that misses its body.
+    // reported as round a segment that misses its body.
     const CHORD_OFF_BODY: f64 = 1.5;
     for k in 0..n {
         let radius = problem.links.radius.get(k).copied().unwrap_or(0.0);
-        let _ = writeln!(
-            out,
-            "  {:<40} chord up to {:.4} {unit}, radius {radius:.4} {unit}",
-            problem.link_label(k),
-            robot.longest_link(k)
-        );
+        let segment = link_segment(&problem.joints, &problem.links.segments, k);
+        let _ = match segment {
+            Some([a, b]) => writeln!(
+                out,
+                "  {:<40} segment a {}  b {} ({unit}, in joint \"{}\"'s frame), radius {radius:.4} {unit}",
+                problem.link_label(k),
+                xyz(a),
+                xyz(b),
+                name(k)
+            ),
+            None => writeln!(
+                out,
+                "  {:<40} chord up to {:.4} {unit}, radius {radius:.4} {unit}",
+                problem.link_label(k),
+                robot.longest_link(k)
+            ),
+        };
         if let Some(body) = problem.urdf.as_ref().and_then(|u| u.bodies.get(k + 1)) {
             let _ = writeln!(
                 out,
@@ -154,16 +173,19 @@ pub fn report(problem: &Problem) -> Result<String, LoadError> {
                     c.radius
                 );
             }
-            // Where the body lies off the chord, the capsule round the
-            // chord is much fatter than the body: say so, since it is what
-            // self-collision checks (a start refused as links touching, a
-            // dead end at a pair's floor).
+            // Where the body lies off the checked segment (the chord, or
+            // the link's own), the capsule round it is much fatter than
+            // the body: say so, since it is what self-collision checks (a
+            // start refused as links touching, a dead end at a pair's
+            // floor). Fitted capsules are in metres, the radius in `unit`.
             let thickest = body.capsules.iter().map(|c| c.radius).fold(0.0, f64::max);
-            if thickest > 0.0 && radius as f64 >= CHORD_OFF_BODY * thickest {
+            let checked = radius as f64 / problem.urdf.as_ref().map_or(1.0, |u| u.per_metre);
+            if thickest > 0.0 && checked >= CHORD_OFF_BODY * thickest {
                 let _ = writeln!(
                     out,
-                    "     the chord misses this body: its capsule is {:.1} times as thick as the body's thickest, and self-collision checks the capsule",
-                    radius as f64 / thickest
+                    "     the {} misses this body: its capsule is {:.1} times as thick as the body's thickest, and self-collision checks the capsule",
+                    if segment.is_some() { "segment" } else { "chord" },
+                    checked / thickest
                 );
             }
         }

@@ -263,14 +263,14 @@ fn random_q(problem: &Problem, rng: &mut Rng) -> Vec<f64> {
 /// the straight joint-space segment `a -> b`, against `t delta` all along.
 fn motion_within_bound(geometry: &Geometry, a: &[f64], b: &[f64]) {
     let delta = geometry.link_motion(a, b);
-    let (mut last, _) = geometry.forward(a);
+    let mut last = geometry.pose(a).origins;
     let mut travelled = vec![0.0f64; delta.len()];
     const K: usize = 200;
     for i in 1..=K {
         // The bound of the segment a -> q(t) is t delta.
         let t = i as f64 / K as f64;
         let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
-        let (o, _) = geometry.forward(&q);
+        let o = geometry.pose(&q).origins;
         for (k, (d, moved)) in delta.iter().zip(&mut travelled).enumerate() {
             // The chord's ends and points along it; the farthest travelled.
             *moved += [0.0, 0.3, 0.5, 1.0]
@@ -314,7 +314,7 @@ fn the_link_motion_bound_holds() {
     // Four 1 m links, 0.5 rad: the tip's arc is 2 m, the bound's.
     let delta = geometry.link_motion(&a, &b);
     assert!((delta[3] - 2.0).abs() < 1e-12, "{delta:?}");
-    let (o, _) = geometry.forward(&b);
+    let o = geometry.pose(&b).origins;
     assert!((o[4][0] - 4.0 * 0.5f64.cos()).abs() < 1e-12);
 }
 
@@ -336,8 +336,7 @@ fn the_checker_measures_the_planners_links() {
         let q32: Vec<f32> = q.iter().map(|&x| x as f32).collect();
         forward_kinematics(&robot, &q32, &mut frames);
         let q: Vec<f64> = q32.iter().map(|&x| x as f64).collect();
-        let (origins, _) = geometry.forward(&q);
-        let gaps = geometry.link_gaps(&origins);
+        let gaps = geometry.link_gaps(&geometry.pose(&q));
         for (&(a, b), gap) in geometry.checked_pairs().iter().zip(gaps) {
             let c = closest_points(
                 &frames.pivot(a),

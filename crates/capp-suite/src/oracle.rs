@@ -131,8 +131,8 @@ impl Space {
             return true;
         }
         let (gaps_a, gaps_b) = (
-            self.geometry.link_gaps(&self.geometry.forward(a).0),
-            self.geometry.link_gaps(&self.geometry.forward(b).0),
+            self.geometry.link_gaps(&self.geometry.pose(a)),
+            self.geometry.link_gaps(&self.geometry.pose(b)),
         );
         let sweep = self.geometry.sweep_links(a, b, &gaps_a, &gaps_b, 0.0, true);
         self.checks += sweep.samples;

@@ -296,8 +296,8 @@ impl Stops<'_> {
             .map(|(&(v, a), l)| Brake::new(v, a, l, self.dt))
             .collect();
         let mut prev = q.to_vec();
-        let (mut prev_origins, _) = g.forward(&prev);
-        let mut prev_gaps = g.link_gaps(&prev_origins);
+        let mut prev_pose = g.pose(&prev);
+        let mut prev_gaps = g.link_gaps(&prev_pose);
         let mut next = prev.clone();
         let mut sample = prev.clone();
         for tick in 1..=MAX_STOP_TICKS {
@@ -311,10 +311,11 @@ impl Stops<'_> {
             if !moved {
                 return (tick - 1, None);
             }
-            let (origins, _) = g.forward(&next);
-            let travel = origins
+            let pose = g.pose(&next);
+            let travel = pose
+                .origins
                 .iter()
-                .zip(&prev_origins)
+                .zip(&prev_pose.origins)
                 .map(|(a, b)| {
                     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
                 })
@@ -341,7 +342,7 @@ impl Stops<'_> {
                     return (tick, Some((tick, what)));
                 }
             }
-            let gaps = g.link_gaps(&origins);
+            let gaps = g.link_gaps(&pose);
             let floor = -self.self_tolerance;
             let worst = g
                 .worst_gap(&gaps)
@@ -364,7 +365,7 @@ impl Stops<'_> {
                 return (tick, Some((tick, what)));
             }
             prev.copy_from_slice(&next);
-            prev_origins = origins;
+            prev_pose = pose;
             prev_gaps = gaps;
         }
         (MAX_STOP_TICKS + 1, None)

@@ -3,7 +3,7 @@
 //!
 //! | file | what |
 //! |---|---|
-//! | `robot.svg`, `robot.png` | the three orthographic views of `arm.png` ([`super::views`]): the arm (blue), each link's capsule (the chord between pivots and the radius self-collision checks: teal band), for a URDF robot the capsules fitted to each body's `<collision>` geometry (orange; the base's too, which nothing checks), the obstacles and the target, a legend |
+//! | `robot.svg`, `robot.png` | the three orthographic views of `arm.png` ([`super::views`]): the arm (blue), each link's capsule (the segment and radius self-collision checks: the chord between pivots, or the link's segment when the scenario gives one; teal band), for a URDF robot the capsules fitted to each body's `<collision>` geometry (orange; the base's too, which nothing checks), the obstacles and the target, a legend |
 //! | `viewer.html` | the 3-D viewer ([`super::viewer`]) for the one configuration, opening with the link capsules shown, and a URDF robot's fitted capsules |
 
 use std::path::{Path, PathBuf};
@@ -18,7 +18,7 @@ use super::views::{
     border, bounds, capsule_outline, obstacle_names, page, panel_frame, panels, silhouettes,
     surfaces, unit_name, Panel, LEFT, OBSTACLE, START, TARGET, TITLES, TOP,
 };
-use crate::geometry::{collision_capsules, forward};
+use crate::geometry::{collision_capsules, pose, Pose};
 use crate::problem::Problem;
 use crate::trajectory::Trajectory;
 
@@ -61,11 +61,14 @@ fn band(canvas: &mut Canvas, p: &Panel, capsule: ([f64; 3], [f64; 3], f64), colo
 /// The views of the robot at `q`: link capsules, fitted collision
 /// capsules, the arm, the obstacles and the target.
 pub fn robot_scene(problem: &Problem, q: &[f64]) -> Canvas {
-    let origins = forward(problem, q).0;
+    let Pose {
+        origins, capsules, ..
+    } = pose(problem, q);
     let fitted = collision_capsules(problem, q);
     let reach: Vec<[f64; 3]> = fitted
         .iter()
         .flat_map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]]])
+        .chain(capsules.iter().flatten().copied())
         .chain(origins.iter().copied())
         .collect();
     let (centre, side) = bounds(problem, &[reach]);
@@ -95,15 +98,9 @@ pub fn robot_scene(problem: &Problem, q: &[f64]) -> Canvas {
     for (p, title) in views.iter().zip(TITLES) {
         panel_frame(&mut canvas, p, title, side, unit);
         let hulls = silhouettes(&mut canvas, p, &surfaces);
-        for (k, link) in origins.windows(2).enumerate() {
+        for (k, &[a, b]) in capsules.iter().enumerate() {
             let radius = problem.links.radius.get(k).copied().unwrap_or(0.0) as f64;
-            band(
-                &mut canvas,
-                p,
-                (link[0], link[1], radius),
-                LINK_CAPSULE,
-                0.12,
-            );
+            band(&mut canvas, p, (a, b, radius), LINK_CAPSULE, 0.12);
         }
         for c in &fitted {
             let ends = ([c[0], c[1], c[2]], [c[3], c[4], c[5]], c[6]);

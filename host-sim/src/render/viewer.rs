@@ -28,7 +28,10 @@
 //! largest of each.
 //!
 //! The link capsules ([`capp_core::self_collision`]): `capsules`, each
-//! link's radius (link `k` is the chord between origins `o_k` and
+//! link's radius; `link_segments`, per frame each link's capsule segment
+//! in world coordinates, `[ax, ay, az, bx, by, bz]` per link flat
+//! ([`crate::geometry::Pose::capsules`]), or `null` when every link's
+//! capsule is round its chord (link `k` between origins `o_k` and
 //! `o_{k+1}`, so the page draws it from the frames it already has);
 //! `self_collision`, whether the scenario keeps them apart; and
 //! `closest_links`, per frame, the closest pair the scenario checks as
@@ -50,7 +53,7 @@ use super::canvas::escape;
 use super::chart::nice_step;
 use super::views::{bounds, escape_color, frames, hull_faces, origins, surface};
 use crate::escapes::{classify, side_name, Kind};
-use crate::geometry::{collision_capsules, forward, Geometry};
+use crate::geometry::{collision_capsules, forward, Geometry, Pose};
 use crate::problem::Problem;
 use crate::trajectory::{Trajectory, TrajectoryRow};
 
@@ -148,20 +151,17 @@ fn hex(c: [u8; 3]) -> String {
     format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
 }
 
-/// Per frame (origins `frames`), the closest pair of links the scenario
-/// checks, by the independent model ([`Geometry::link_gaps`], as the
-/// summary names it): DH link numbers (1-based) and the capsules' distance;
-/// `None` for every frame when no pair is checked.
-pub fn closest_links(
-    problem: &Problem,
-    frames: &[&[[f64; 3]]],
-) -> Vec<Option<(usize, usize, f64)>> {
-    let geometry = Geometry::new(problem);
+/// Per frame (the arm at each, [`Geometry::pose`]), the closest pair of
+/// links the scenario checks, by the independent model `geometry`
+/// ([`Geometry::link_gaps`], as the summary names it): DH link numbers
+/// (1-based) and the capsules' distance; `None` for every frame when no
+/// pair is checked.
+pub fn closest_links(geometry: &Geometry, frames: &[Pose]) -> Vec<Option<(usize, usize, f64)>> {
     frames
         .iter()
-        .map(|o| {
+        .map(|pose| {
             geometry
-                .worst_gap(&geometry.link_gaps(o))
+                .worst_gap(&geometry.link_gaps(pose))
                 .map(|g| (g.links.0 + 1, g.links.1 + 1, g.gap))
         })
         .collect()
@@ -375,8 +375,18 @@ pub fn run_json_with(problem: &Problem, t: &Trajectory, options: ViewerOptions) 
         false => "null".into(),
     };
     let _ = writeln!(s, "\"collision_capsules\": {collision},");
-    let shown: Vec<&[[f64; 3]]> = picks.iter().map(|&k| origins[k].as_slice()).collect();
-    let pairs: Vec<String> = closest_links(problem, &shown)
+    let geometry = Geometry::new(problem);
+    let shown: Vec<Pose> = picks.iter().map(|&k| geometry.pose(&t.rows[k].q)).collect();
+    let segments = match problem.links.segments.is_empty() {
+        true => "null".into(),
+        false => list(
+            shown
+                .iter()
+                .flat_map(|p| p.capsules.iter().flatten().flatten().map(|v| Some(*v))),
+        ),
+    };
+    let _ = writeln!(s, "\"link_segments\": {segments},");
+    let pairs: Vec<String> = closest_links(&geometry, &shown)
         .into_iter()
         .map(|p| match p {
             Some((a, b, gap)) => {

@@ -41,7 +41,7 @@ pub struct Draft {
 pub struct LinkClearance {
     /// The two links, 0-based (DH links `a + 1`, `b + 1`).
     pub links: (usize, usize),
-    /// Distance between their capsules (the chords' distance less both radii), length units.
+    /// Distance between their capsules (the capsule segments' distance less both radii), length units.
     pub gap: f64,
     /// `gap / (r_a + r_b)`, as the planner measures a link pair.
     pub clearance: f64,
@@ -57,12 +57,12 @@ pub fn closest_links(
     q: &[f64],
     apart: usize,
 ) -> Option<LinkClearance> {
-    let (origins, _) = geometry.forward(q);
+    let pose = geometry.pose(q);
     let radius = |k: usize| problem.links.radius.get(k).map_or(0.0, |&r| r as f64);
     geometry
         .checked_pairs()
         .iter()
-        .zip(geometry.link_gaps(&origins))
+        .zip(geometry.link_gaps(&pose))
         .filter(|(&(a, b), _)| b - a >= apart)
         .map(|(&(a, b), gap)| LinkClearance {
             links: (a, b),
