@@ -306,9 +306,13 @@ fn chord_gap(problem: &Problem, origins: &[[f64; 3]], (a, b): (usize, usize)) ->
 #[test]
 fn without_segments_the_gaps_are_the_chords_exactly() {
     let mut rng = Rng(3);
+    // The UR5's capsules as chords (the loader gives it segments).
+    let mut ur5 = scenario("ur5_table.toml");
+    assert_eq!(ur5.links.segments.len(), ur5.joints.len());
+    ur5.links.segments.clear();
     for problem in [
         scenario("pips_free_space.toml"),
-        scenario("ur5_table.toml"),
+        ur5,
         three_link_arm(Vec::new()),
     ] {
         assert!(problem.links.segments.is_empty());
@@ -343,15 +347,26 @@ fn without_segments_the_gaps_are_the_chords_exactly() {
 
 /// `capp robot`'s report and `capp acm`'s name the segment each link's
 /// capsule is round, and the report's "misses this body" note weighs the
-/// capsule checked: the UR5's upper arm keeps its note while its radius is
-/// the chord's (0.2121 m against a body of 0.1006 m), and loses it with a
-/// segment through the body and a radius to match.
+/// capsule checked: the UR5's upper arm, loaded, is its body's own capsule
+/// (no note); round its chord it needs 0.2121 m against a body of 0.1006
+/// m (the note), and so does a segment that misses the body.
 #[test]
 fn the_reports_name_the_segments() {
     let mut problem = scenario("ur5_table.toml");
     let n = problem.joints.len();
+    let loaded = capp_sim::robot_report::report(&problem).unwrap();
+    assert!(
+        loaded.contains("segment a 0.0010 -0.1313 0.0004  b -0.0008 -0.1310 0.4246 (m, in joint \"shoulder_lift_joint\"'s frame), radius 0.1006 m"),
+        "{loaded}"
+    );
+    assert!(!loaded.contains("misses this body"), "{loaded}");
+    problem.links.segments.clear();
+    problem.links.radius[1] = 0.2121;
     let chords = capp_sim::robot_report::report(&problem).unwrap();
-    assert!(chords.contains("the chord misses this body"), "{chords}");
+    assert!(
+        chords.contains("the chord misses this body: its capsule is 2.1 times as thick"),
+        "{chords}"
+    );
     assert!(!chords.contains("segment a"), "{chords}");
     problem.links.segments = vec![[[0.0, 0.0, 0.0], [0.0, 0.0, 0.1]]; n];
     problem.links.segments[1] = [[0.0, 0.0, 0.0], [0.425, 0.0, 0.0]];
