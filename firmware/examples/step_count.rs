@@ -529,6 +529,10 @@ fn main() -> ! {
     if let Ok(scene) = scenes::pips_general(8) {
         measure("pips_general", &scene, overhead, false, 0);
     }
+    // What link segments cost: every capsule a segment of its own.
+    if let Ok(scene) = scenes::pips_segments(8) {
+        measure("pips_segments", &scene, overhead, false, 0);
+    }
     // What the tracker costs (issue 22): the same PIPS + 8, a tracked tick.
     if let Ok(scene) = scenes::pips_tracked(8) {
         measure("pips_tracked", &scene, overhead, true, 0);

@@ -379,6 +379,18 @@ pub fn tables(
         },
     );
     let _ = writeln!(w);
+    let segments = counts.get("pips_segments", 18, 8, "step");
+    let _ = writeln!(
+        w,
+        "Link capsules round segments of their own (a URDF link whose body lies off its chord, `Robot::set_link_segments`; here every link's chord written in its body's frame): the same general PIPS + 8 step {} against {} round the chords, {}.",
+        opt(segments, grouped),
+        opt(general, grouped),
+        match (segments, general) {
+            (Some(s), Some(g)) if g > 0.0 => format!("{:+.1} %", 100.0 * (s / g - 1.0)),
+            _ => "-".into(),
+        },
+    );
+    let _ = writeln!(w);
     let _ = writeln!(w, "Every step of the two shipped dead ends, timed one at a time and grouped by what the escape was doing after it (`pips_escape.toml`: a detour round the box, then reached; `pips_dead_end.toml`: no path, so detours and walks until the 64 attempts are spent, the return to the best configuration, `Stalled`). A step's cost is set by its halvings (each one evaluates the arm again; at most `max_halvings` = 8), not by the escape; the steps that start an escape add `Escape::on_stall`, timed alone in the last column from the scene's warmed-up state.");
     let _ = writeln!(w);
     let _ = writeln!(w, "| scenario | obstacles | steps | law alone: mean / max | detour: mean / max | walk: mean / max | search slice: mean / max | searched path: mean / max | return: mean / max | steps that start an escape: count, mean / max | `on_stall` alone: detour / walk |");

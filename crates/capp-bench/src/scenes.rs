@@ -294,6 +294,28 @@ pub fn pips_general(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> 
     pips_robot(robot, obstacles, settings(), true)
 }
 
+/// [`pips_general`] with every link's self-collision capsule a segment of
+/// its own ([`Robot::set_link_segments`]): its chord written in its body's
+/// frame (a prismatic link's from its moved origin), what a URDF robot
+/// whose bodies lie off their chords costs against chords.
+pub fn pips_segments(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError> {
+    let mut joints = pips::joints();
+    let tool = capp_core::robot::general_from_dh(&pips::joints(), &mut joints);
+    let mut robot = Robot::new_with_tool(&joints, &tool).map_err(ScenarioError::Robot)?;
+    let mut segments = [[[0.0f32; 3]; 2]; PIPS_JOINTS];
+    for (k, segment) in segments.iter_mut().enumerate() {
+        let end = match joints.get(k + 1).and_then(|j| j.origin) {
+            Some(next) => next.placement.translation,
+            None => tool.translation,
+        };
+        segment[1] = end;
+    }
+    robot
+        .set_link_segments(&segments)
+        .map_err(ScenarioError::Capsules)?;
+    pips_robot(robot, obstacles, settings(), true)
+}
+
 fn pips_with(
     obstacles: usize,
     settings: Settings,
