@@ -273,7 +273,8 @@ fn a_tracked_plan_on_the_board_is_the_host_plan_with_its_drive_state() {
 
 /// A robot from its URDF on the board (issue 23, protocol 9): the UR5's six
 /// general joints (each joint's origin and axis) and its tool travel in the
-/// upload, with the link capsules fitted to its collision meshes, and the
+/// upload, with the link capsules fitted to its collision meshes (round
+/// segments of their own), and the
 /// board's plan round the box on the table is `capp run`'s to the bit.
 #[test]
 fn a_urdf_robot_planned_on_the_board_is_the_host_plan() {
@@ -287,6 +288,9 @@ fn a_urdf_robot_planned_on_the_board_is_the_host_plan() {
         !problem.tool.is_identity(),
         "tool0 is a placement of its own"
     );
+    // Its capsules are segments of their own (the upper arm's body lies
+    // off its chord): protocol 12's `Capsule.segment` carries them.
+    assert_eq!(problem.links.segments.len(), problem.joints.len());
     let n = serial_matches_run_at(&path, &elf);
     assert!(n > 5, "{n} setpoints");
 }
