@@ -180,6 +180,7 @@ fn firmware_under_qemu_streams_the_host_plan_bit_for_bit() {
         let capsule = capp_proto::Capsule {
             radius: if i == 3 { 0.0 } else { 1.5 },
             checked: 0,
+            segment: None,
         };
         link.request(&Command::Capsule {
             index: i as u8,

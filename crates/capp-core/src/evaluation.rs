@@ -92,7 +92,7 @@ impl<const N: usize> Evaluation<N> {
         } = self;
         close_pairs.clear();
         planes.fill(None);
-        *frames = Frames::default();
+        frames.clear();
         *error = PoseError::default();
         mu.fill(0.0);
         distance_sq.fill(0.0);

@@ -333,7 +333,10 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     /// ([`crate::control::joint_space`]), and passes it when the joints are
     /// within a twentieth of a time step of it at their rate limits. At most
     /// [`MAX_JOINT_GOALS`] per scenario; the waypoint's pose becomes the
-    /// configuration's (for the reports).
+    /// configuration's (for the reports). Never inlined: its `Frames` (2 KiB
+    /// for 32 joints) must not sit in a caller's stack frame while the
+    /// caller goes on to plan (the board's load).
+    #[inline(never)]
     pub fn set_joint_goal(&mut self, waypoint: usize, joints: &[f32]) -> Result<(), ScenarioError> {
         let index = waypoint.min(u8::MAX as usize) as u8;
         let bad = |problem| MissionError::BadJointGoal {

@@ -44,6 +44,27 @@ impl<const N: usize> Default for Frames<N> {
 }
 
 impl<const N: usize> Frames<N> {
+    /// [`Frames::default`] in place, field by field (no frames-sized
+    /// temporary: `Frames` of 32 joints is 2 KiB).
+    pub fn clear(&mut self) {
+        let Frames {
+            n,
+            base,
+            link_end,
+            axis,
+            end_rotation,
+            segment,
+            segments,
+        } = self;
+        *n = 0;
+        *base = Vec3::zeros();
+        link_end.fill(Vec3::zeros());
+        axis.fill(Vec3::z());
+        *end_rotation = Mat3::identity();
+        segment.fill([Vec3::zeros(); 2]);
+        *segments = false;
+    }
+
     /// Number of joints these frames were computed for.
     #[inline]
     pub fn len(&self) -> usize {
