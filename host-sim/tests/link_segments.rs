@@ -14,21 +14,16 @@ use capp_sim::geometry::{link_reach, longest_links, segment_distance, Geometry, 
 use capp_sim::input::scenario_file;
 use capp_sim::Problem;
 
-/// xorshift64*: the tests' own seeded numbers.
-struct Rng(u64);
+mod common;
 
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
+use common::Rng;
 
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
+/// The tests' points.
+trait Points {
+    fn point(&mut self, size: f64) -> [f32; 3];
+}
 
+impl Points for Rng {
     fn point(&mut self, size: f64) -> [f32; 3] {
         [0; 3].map(|_| self.range(-size, size) as f32)
     }

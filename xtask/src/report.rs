@@ -373,10 +373,7 @@ pub fn tables(
         "General (URDF) joints (issue 23): the same PIPS + 8 step with the arm written as general joints (`capp_core::robot::general_from_dh`: a fixed transform, then a turn about z): {} against {} for its DH rows, {} (target: at most 3 % above).",
         opt(general, grouped),
         opt(dh, grouped),
-        match (general, dh) {
-            (Some(g), Some(d)) if d > 0.0 => format!("{:+.1} %", 100.0 * (g / d - 1.0)),
-            _ => "-".into(),
-        },
+        above(general, dh),
     );
     let _ = writeln!(w);
     let segments = counts.get("pips_segments", 18, 8, "step");
@@ -385,10 +382,7 @@ pub fn tables(
         "Link capsules round segments of their own (a URDF link whose body lies off its chord, `Robot::set_link_segments`; here every link's chord written in its body's frame): the same general PIPS + 8 step {} against {} round the chords, {}.",
         opt(segments, grouped),
         opt(general, grouped),
-        match (segments, general) {
-            (Some(s), Some(g)) if g > 0.0 => format!("{:+.1} %", 100.0 * (s / g - 1.0)),
-            _ => "-".into(),
-        },
+        above(segments, general),
     );
     let _ = writeln!(w);
     let _ = writeln!(w, "Every step of the two shipped dead ends, timed one at a time and grouped by what the escape was doing after it (`pips_escape.toml`: a detour round the box, then reached; `pips_dead_end.toml`: no path, so detours and walks until the 64 attempts are spent, the return to the best configuration, `Stalled`). A step's cost is set by its halvings (each one evaluates the arm again; at most `max_halvings` = 8), not by the escape; the steps that start an escape add `Escape::on_stall`, timed alone in the last column from the scene's warmed-up state.");
@@ -717,6 +711,14 @@ pub fn splice(doc: &str, tables: &str) -> Result<String> {
         &doc[..begin],
         &doc[end..]
     ))
+}
+
+/// How far `count` is above `base`, as "+1.3 %" ("-" when either is missing).
+fn above(count: Option<f64>, base: Option<f64>) -> String {
+    match (count, base) {
+        (Some(c), Some(b)) if b > 0.0 => format!("{:+.1} %", 100.0 * (c / b - 1.0)),
+        _ => "-".into(),
+    }
 }
 
 #[cfg(test)]

@@ -9,6 +9,24 @@ use capp_sim::output::rows_csv;
 use capp_sim::trajectory::Trajectory;
 use capp_sim::{plan, trajectory, Problem};
 
+/// xorshift64*: the tests' own seeded numbers.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// Uniform in [0, 1).
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
 /// The planar arm of `capp-core`'s tests (links of 10 in, reach 30 in),
 /// starting at `START`, its hand at (28.96, 2.90); the target is the hand's
 /// mirror image across y = 0, 5.80 in away. A wall along y = 0, from
