@@ -429,7 +429,7 @@ impl Problem {
         // The capsules as the planner checks them.
         robot
             .set_link_segments(&self.links.segments)
-            .map_err(|e| self.capsule_error(ScenarioError::Capsules(e)))?;
+            .map_err(|e| self.capsule_error(ScenarioError::Capsules(e.into())))?;
         let allowed: Vec<(u8, u8)> = self
             .links
             .allowed

@@ -16,7 +16,7 @@ use capp_sim::Problem;
 
 mod common;
 
-use common::Rng;
+use common::{random_q, Rng};
 
 /// The tests' points.
 trait Points {
@@ -196,14 +196,6 @@ fn chord_motion(problem: &Problem, a: &[f64], b: &[f64]) -> Vec<f64> {
         }
     }
     delta
-}
-
-fn random_q(problem: &Problem, rng: &mut Rng) -> Vec<f64> {
-    problem
-        .joints
-        .iter()
-        .map(|j| rng.range(j.min as f64, j.max as f64))
-        .collect()
 }
 
 /// On `trials` random straight joint-space segments (short and long; every

@@ -14,7 +14,7 @@ use capp_sim::Problem;
 
 mod common;
 
-use common::Rng;
+use common::{random_q, Rng};
 
 /// The tests' points.
 trait Points {
@@ -244,14 +244,6 @@ fn segment_distance_known_values() {
 fn pips() -> Problem {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pips_free_space.toml");
     Problem::load(&path).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn random_q(problem: &Problem, rng: &mut Rng) -> Vec<f64> {
-    problem
-        .joints
-        .iter()
-        .map(|j| rng.range(j.min as f64, j.max as f64))
-        .collect()
 }
 
 /// How far the chord points of each link travel (path length, sampled) on

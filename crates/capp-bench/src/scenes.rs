@@ -312,7 +312,7 @@ pub fn pips_segments(obstacles: usize) -> Result<Scene<PIPS_JOINTS>, SceneError>
     }
     robot
         .set_link_segments(&segments)
-        .map_err(ScenarioError::Capsules)?;
+        .map_err(|e| ScenarioError::Capsules(e.into()))?;
     pips_robot(robot, obstacles, settings(), true)
 }
 

@@ -395,7 +395,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
     pub fn set_link_segments(&mut self, segments: &[[[f32; 3]; 2]]) -> Result<(), ScenarioError> {
         let result = self.robot.set_link_segments(segments);
         self.capsules.fit(&self.robot);
-        Ok(result?)
+        result.map_err(|e| ScenarioError::Capsules(e.into()))
     }
 
     /// The links' capsules and checked pairs (none unless

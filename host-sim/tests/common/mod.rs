@@ -27,6 +27,15 @@ impl Rng {
     }
 }
 
+/// A configuration drawn uniformly within `problem`'s joint limits.
+pub fn random_q(problem: &Problem, rng: &mut Rng) -> Vec<f64> {
+    problem
+        .joints
+        .iter()
+        .map(|j| rng.range(j.min as f64, j.max as f64))
+        .collect()
+}
+
 /// The planar arm of `capp-core`'s tests (links of 10 in, reach 30 in),
 /// starting at `START`, its hand at (28.96, 2.90); the target is the hand's
 /// mirror image across y = 0, 5.80 in away. A wall along y = 0, from

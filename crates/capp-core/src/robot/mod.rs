@@ -346,6 +346,26 @@ impl core::fmt::Display for RobotError {
     }
 }
 
+/// Why link segments were rejected ([`Robot::set_link_segments`]; the
+/// scenario reports them as `self_collision::CapsuleError`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentError {
+    /// Segments for a robot of DH rows (only general joints take them).
+    NeedGeneralJoints,
+    /// Not one segment per link.
+    WrongLength {
+        /// Segments given.
+        given: usize,
+        /// Links of the robot.
+        links: usize,
+    },
+    /// An end that is not finite or beyond [`MAX_LENGTH`] (`link` 0-based).
+    BadSegment {
+        /// The link.
+        link: u8,
+    },
+}
+
 /// Per-joint constants derived once at validation, used by forward kinematics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct LinkConstants {
@@ -661,11 +681,7 @@ impl<const N: usize> Robot<N> {
     /// On error the robot keeps its chords. Never inlined: called once per
     /// load, it need not grow the load's code on the board.
     #[inline(never)]
-    pub fn set_link_segments(
-        &mut self,
-        segments: &[[[f32; 3]; 2]],
-    ) -> Result<(), crate::self_collision::CapsuleError> {
-        use crate::self_collision::CapsuleError;
+    pub fn set_link_segments(&mut self, segments: &[[[f32; 3]; 2]]) -> Result<(), SegmentError> {
         let n = self.len();
         self.segments = false;
         let mut chain_before = 0.0f32;
@@ -677,10 +693,10 @@ impl<const N: usize> Robot<N> {
             return Ok(());
         }
         if !self.general {
-            return Err(CapsuleError::SegmentsNeedGeneralJoints);
+            return Err(SegmentError::NeedGeneralJoints);
         }
         if segments.len() != n {
-            return Err(CapsuleError::WrongLength {
+            return Err(SegmentError::WrongLength {
                 given: segments.len(),
                 links: n,
             });
@@ -691,7 +707,7 @@ impl<const N: usize> Robot<N> {
                 .flatten()
                 .all(|x| x.is_finite() && x.abs() <= MAX_LENGTH)
             {
-                return Err(CapsuleError::BadSegment { link: k as u8 });
+                return Err(SegmentError::BadSegment { link: k as u8 });
             }
         }
         for ((link, joint), segment) in self.links.iter_mut().zip(self.joints.iter()).zip(segments)

@@ -28,7 +28,7 @@ pub mod field;
 pub mod pairs;
 pub mod segment;
 
-use crate::robot::{Robot, MAX_LENGTH};
+use crate::robot::{Robot, SegmentError, MAX_LENGTH};
 
 /// Most links a scenario with self-collision may have (the checked pairs of
 /// a link are one `u64` of bits).
@@ -87,6 +87,18 @@ pub enum CapsuleError {
     },
     /// Link segments for a robot of DH rows (only general joints take them).
     SegmentsNeedGeneralJoints,
+}
+
+impl From<SegmentError> for CapsuleError {
+    fn from(e: SegmentError) -> Self {
+        match e {
+            SegmentError::NeedGeneralJoints => CapsuleError::SegmentsNeedGeneralJoints,
+            SegmentError::WrongLength { given, links } => {
+                CapsuleError::WrongLength { given, links }
+            }
+            SegmentError::BadSegment { link } => CapsuleError::BadSegment { link },
+        }
+    }
 }
 
 impl core::fmt::Display for CapsuleError {
@@ -174,12 +186,8 @@ impl<const N: usize> LinkCapsules<N> {
         }
         let mut capsules = Self::none();
         // Zipped iterators, not indices: no panic path on the board.
-        let slots = capsules
-            .radius
-            .iter_mut()
-            .zip(capsules.reach.iter_mut())
-            .zip(capsules.checked.iter_mut());
-        for (link, (((&r, &row), _), ((radius, reach), checked))) in radius
+        let slots = capsules.radius.iter_mut().zip(capsules.checked.iter_mut());
+        for (link, (((&r, &row), _), (radius, checked))) in radius
             .iter()
             .zip(checked)
             .zip(robot.joints())
@@ -196,10 +204,10 @@ impl<const N: usize> LinkCapsules<N> {
                 return Err(CapsuleError::BadPair { link: link as u8 });
             }
             *radius = r;
-            *reach = 0.5 * robot.capsule_length(link) + (1.0 + INFLUENCE * CLEARANCE_SCALE) * r;
             *checked = row;
         }
         capsules.n = n;
+        capsules.fit(robot);
         // A link has a far room when it is in any checked pair.
         let mut paired = 0u64;
         for (a, &row) in capsules.checked.iter().enumerate() {
@@ -220,8 +228,9 @@ impl<const N: usize> LinkCapsules<N> {
         Ok(capsules)
     }
 
-    /// Sizes the broad phase's spheres anew for `robot`'s capsule segments
-    /// (after [`Robot::set_link_segments`]).
+    /// Sizes the broad phase's spheres ([`LinkCapsules::reach`]) for
+    /// `robot`'s capsules: at [`LinkCapsules::new`], and again after
+    /// [`Robot::set_link_segments`].
     pub(crate) fn fit(&mut self, robot: &Robot<N>) {
         for (k, (reach, &r)) in self
             .reach

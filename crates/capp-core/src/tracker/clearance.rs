@@ -385,6 +385,7 @@ fn first_order<const N: usize>(
     let mut w = Vec3::zeros();
     let mut b = Vec3::zeros();
     let mut start_sq = 0.0f32;
+    let segments = frames.has_segments();
     for (j, ((((joint, &step), out), (tw, sb)), (m, ev))) in robot
         .joints()
         .iter()
@@ -406,7 +407,7 @@ fn first_order<const N: usize>(
         let end_sq = ev.norm_squared();
         *out = max(*out, max(start_sq, end_sq));
         start_sq = end_sq;
-        if frames.has_segments() {
+        if segments {
             // The capsule's own ends, off the chord.
             let (start, end) = frames.capsule(j);
             let ends_sq = max(
