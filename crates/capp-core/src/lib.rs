@@ -51,7 +51,8 @@
 //!   operations, which round alike everywhere), and every square root through
 //!   [`math::sqrt`] (correctly rounded: the FPU's instruction on the board),
 //!   so the same inputs give the same bits on the host and on a Cortex-M4F.
-//! * No `unsafe` but the inline assembly behind [`math::sqrt`] on the board
+//! * No `unsafe` but the inline assembly behind [`math::sqrt`] and the C
+//!   library's `sqrtf` behind [`math::sqrt_inline`] on the board
 //!   (the FPU's square root instruction).
 #![cfg_attr(not(feature = "trace"), no_std)]
 #![deny(unsafe_code)]

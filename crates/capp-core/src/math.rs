@@ -24,7 +24,8 @@ pub type Mat3 = Matrix3<f32>;
 ///
 /// Why hand-written: `f32::sqrt` is `std`-only, `core::f32::math::sqrt`
 /// is unstable, and `libm` has no Arm implementation. The inline assembly
-/// in `vsqrt` is the one `unsafe` block of this crate.
+/// in `vsqrt` and the C library's `sqrtf` behind [`sqrt_inline`] are the
+/// crate's only `unsafe` items.
 #[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
@@ -60,6 +61,34 @@ fn vsqrt(x: f32) -> f32 {
         );
     }
     f32::from_bits(bits)
+}
+
+/// [`sqrt`] written inline, for the pair loops that take a root a pair:
+/// 4 instructions a root on the board against 11 for [`sqrt`]'s call.
+///
+/// On the board this is `sqrtf` of the C library, which LLVM knows: on an
+/// FPU with a square root its `PartiallyInlineLibCalls` pass writes the
+/// call as `vsqrt.f32` inline, and keeps a call (to `compiler_builtins`'
+/// `sqrtf`, `libm`'s code) only for a NaN result, where C would set
+/// `errno`. The same correctly rounded root as [`sqrt`], so the same bits.
+/// Not the default: the fallback call in every caller's code takes flash
+/// (about 20 bytes a root) and, inside a loop whose registers are all
+/// taken, makes the loop dearer where the root is not even reached (the
+/// obstacle pair loop: 370 instructions a PIPS + 8 step).
+#[inline(always)]
+pub fn sqrt_inline(x: f32) -> f32 {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        #[allow(unsafe_code)]
+        unsafe extern "C" {
+            safe fn sqrtf(x: f32) -> f32;
+        }
+        sqrtf(x)
+    }
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    {
+        libm::sqrtf(x)
+    }
 }
 
 /// Euclidean length, through [`sqrt`].

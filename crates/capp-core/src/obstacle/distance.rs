@@ -14,7 +14,7 @@
 //! them for every avoidance point within an obstacle's influence.
 
 use super::Shape;
-use crate::math::{max, min, sqrt, vec3, Vec3};
+use crate::math::{max, min, sqrt_inline, vec3, Vec3};
 
 /// A primitive in its own frame: sizes in length units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,7 +147,7 @@ fn clamp(v: f32, h: f32) -> f32 {
 /// `|v| - radius` along `v / |v|` (`+z` at the centre itself).
 #[inline(always)]
 fn from_core(v: &Vec3, radius: f32) -> (f32, Vec3) {
-    let r = sqrt(v.dot(v));
+    let r = sqrt_inline(v.dot(v));
     if r > 0.0 {
         (r - radius, v / r)
     } else {
@@ -169,7 +169,7 @@ fn cuboid(x: &Vec3, half: &Vec3) -> (f32, Vec3) {
     let outside = from_box(x, half);
     let out_sq = outside.dot(&outside);
     if out_sq > 0.0 {
-        let d = sqrt(out_sq);
+        let d = sqrt_inline(out_sq);
         return (d, outside / d);
     }
     // Inside (or on the surface): the nearest face is the least deep.
@@ -188,7 +188,7 @@ fn cuboid(x: &Vec3, half: &Vec3) -> (f32, Vec3) {
 
 #[inline(always)]
 fn cylinder(x: &Vec3, radius: f32, half_length: f32) -> (f32, Vec3) {
-    let rho = sqrt(x.x * x.x + x.y * x.y);
+    let rho = sqrt_inline(x.x * x.x + x.y * x.y);
     let radial = if rho > 0.0 {
         Vec3::new(x.x / rho, x.y / rho, 0.0)
     } else {
@@ -199,7 +199,7 @@ fn cylinder(x: &Vec3, radius: f32, half_length: f32) -> (f32, Vec3) {
     match (dr > 0.0, dz > 0.0) {
         (true, true) => {
             // Beyond the rim: from the circle at the end.
-            let d = sqrt(dr * dr + dz * dz);
+            let d = sqrt_inline(dr * dr + dz * dz);
             (d, (radial * dr + axial * dz) / d)
         }
         (true, false) => (dr, radial),

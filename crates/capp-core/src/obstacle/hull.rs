@@ -33,7 +33,7 @@
 //! BENCHMARKS.md. The host's checker measures hulls independently, by
 //! their enumerated faces in f64 (`host-sim/src/polytope.rs`).
 
-use crate::math::{sqrt, vec3, Vec3};
+use crate::math::{sqrt_inline as sqrt, vec3, Vec3};
 
 /// Most hulls a scenario holds.
 pub const MAX_HULLS: usize = 8;

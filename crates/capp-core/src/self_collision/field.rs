@@ -185,7 +185,7 @@ pub fn link_pairs<const N: usize>(
                     // The capsules lie within their spheres of `reach`
                     // less the influence's share of the radii.
                     let inflation = INFLUENCE * CLEARANCE_SCALE * (r_a + r_b);
-                    let gap = crate::math::sqrt(centres_sq) - reach + inflation;
+                    let gap = crate::math::sqrt_inline(centres_sq) - reach + inflation;
                     let pair = LinkPair {
                         clearance: f32::INFINITY,
                         gap,
@@ -197,7 +197,7 @@ pub fn link_pairs<const N: usize>(
             }
             let ((start_a, end_a), (start_b, end_b)) = (frames.capsule(a), frames.capsule(b));
             let pair = closest_points(&start_a, &end_a, &start_b, &end_b);
-            let distance = crate::math::sqrt(pair.distance_sq);
+            let distance = crate::math::sqrt_inline(pair.distance_sq);
             let radii = r_a + r_b;
             let gap = distance - radii;
             let scale = CLEARANCE_SCALE * radii;
