@@ -32,7 +32,7 @@ step "firmware: format, lints, both boards"
   cargo build --profile f446 --no-default-features --features nucleo-f446re --target-dir target/f446
 )
 
-step "firmware size (flash = .vector_table + .text + .rodata + .data <= 112 KiB (108 KiB before the link capsule segments, 104 KiB before the convex hulls, 96 KiB before issue 24's obstacle shapes); static RAM = .data + .bss + .uninit <= 96 KiB: 32 KiB before the escape search's tree, which adds 34 KiB for 32 joints)"
+step "firmware size (flash = .vector_table + .text + .rodata + .data <= 120 KiB (112 KiB before the hulls' faces and edges, 108 KiB before the link capsule segments, 104 KiB before the convex hulls, 96 KiB before issue 24's obstacle shapes); static RAM = .data + .bss + .uninit <= 104 KiB (96 KiB before the hulls' faces and edges), of the F446's 128: 32 KiB before the escape search's tree, which adds 34 KiB for 32 joints)"
 for elf in firmware/target/thumbv7em-none-eabihf/release/capp-firmware \
            firmware/target/f446/thumbv7em-none-eabihf/f446/capp-firmware; do
   echo "$elf"
@@ -42,8 +42,8 @@ for elf in firmware/target/thumbv7em-none-eabihf/release/capp-firmware \
     $1 == ".data" { flash += $2; ram += $2 }
     $1 ~ /^\.(bss|uninit)$/ { ram += $2 }
     END {
-      printf "flash %d B (target 114688), static RAM %d B (target 98304)\n", flash, ram
-      if (flash > 114688 || ram > 98304) { print elf ": over the memory targets"; exit 1 }
+      printf "flash %d B (target 122880), static RAM %d B (target 106496)\n", flash, ram
+      if (flash > 122880 || ram > 106496) { print elf ": over the memory targets"; exit 1 }
     }'
 done
 

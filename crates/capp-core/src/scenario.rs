@@ -91,8 +91,12 @@ impl core::fmt::Display for ScenarioError {
 pub struct Scenario<const N: usize, const M: usize, const W: usize> {
     robot: Robot<N>,
     obstacles: heapless::Vec<Obstacle, M>,
-    /// The hulls convex obstacles name ([`Scenario::init_with_hulls`]).
-    hulls: heapless::Vec<Hull, MAX_HULLS>,
+    /// The hulls convex obstacles name ([`Scenario::init_with_hulls`]):
+    /// the first `hull_count`, each built in place (a hull is over a
+    /// kilobyte, never a temporary on a board's stack).
+    hulls: [Hull; MAX_HULLS],
+    /// How many of `hulls` are the scenario's.
+    hull_count: u8,
     targets: heapless::Vec<Target, W>,
     /// Joint configurations some targets are ([`Scenario::set_joint_goal`]).
     joint_goals: heapless::Vec<[f32; N], MAX_JOINT_GOALS>,
@@ -126,7 +130,8 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
         Scenario {
             robot: Robot::empty(),
             obstacles: heapless::Vec::new(),
-            hulls: heapless::Vec::new(),
+            hulls: core::array::from_fn(|_| Hull::empty()),
+            hull_count: 0,
             targets: heapless::Vec::new(),
             joint_goals: heapless::Vec::new(),
             settings: Settings::default(),
@@ -213,6 +218,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             robot,
             obstacles: validated,
             hulls: kept_hulls,
+            hull_count,
             targets,
             joint_goals,
             settings: kept_settings,
@@ -224,7 +230,7 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             *limits = DriveLimits::from_rate(joint.max_rate);
         }
         validated.clear();
-        kept_hulls.clear();
+        *hull_count = 0;
         targets.clear();
         joint_goals.clear();
         *kept_settings = settings;
@@ -241,11 +247,12 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
             }
             .into());
         }
-        for (i, vertices) in hulls.iter().enumerate() {
-            let hull =
-                Hull::new(vertices).map_err(|why| ObstacleError::BadHull { hull: i as u8, why })?;
-            let _ = kept_hulls.push(hull);
+        for (i, (vertices, hull)) in hulls.iter().zip(kept_hulls.iter_mut()).enumerate() {
+            hull.set(vertices)
+                .map_err(|why| ObstacleError::BadHull { hull: i as u8, why })?;
+            *hull_count = i as u8 + 1;
         }
+        let kept_hulls = kept_hulls.get(..*hull_count as usize).unwrap_or(&[]);
         for (i, s) in obstacles.iter().enumerate() {
             let o = Obstacle::new_in(
                 i as u8,
@@ -300,14 +307,14 @@ impl<const N: usize, const M: usize, const W: usize> Scenario<N, M, W> {
 
     /// The validated hulls convex obstacles name.
     pub fn hulls(&self) -> &[Hull] {
-        &self.hulls
+        self.hulls.get(..self.hull_count as usize).unwrap_or(&[])
     }
 
     /// The obstacles with the hulls they name: what the pair code reads.
     pub fn world(&self) -> World<'_> {
         World {
             obstacles: &self.obstacles,
-            hulls: &self.hulls,
+            hulls: self.hulls(),
         }
     }
 

@@ -10,9 +10,17 @@
 //! table does not grow by a vertex array per obstacle (64 obstacles of 32
 //! inline vertices would take 48 KiB in two copies).
 //!
-//! [`Hull::distance`] finds the closest point of the hull to a point `x`:
-//! each iteration takes the vertex farthest along the search direction (the
-//! support, one dot product a vertex) and the closest point of the simplex
+//! [`Hull::distance`] first tries the hull's faces and edges (found once,
+//! by brute force, when the hull is built: at most [`MAX_HULL_FACES`] and
+//! [`MAX_HULL_EDGES`]): the highest face's plane and its neighbours' planes
+//! give the distance when `x` is over the face, and otherwise one of its
+//! edges (or an edge's end) certified the closest point by its Voronoi
+//! region (`Hull::by_faces`). On the 16-vertex prism of `BENCHMARKS.md`
+//! every query outside is answered so, at about half GJK's cost (602 M4F
+//! instructions a query against 1 079). Where that certifies nothing
+//! (inside, a hull beyond the limits, rounding at a region's border) GJK
+//! answers: each iteration takes the vertex farthest along the search
+//! direction (the support, one dot product a vertex) and the closest point of the simplex
 //! of at most four support points found so far (Ericson, "Real-Time
 //! Collision Detection", 2005, 5.1.5-5.1.6, by Voronoi regions). It stops
 //! when the support no longer moves the bound by more than f32 rounding, or
@@ -29,11 +37,11 @@
 //! Written here, not taken from `parry3d`: parry's point queries need its
 //! `alloc` shapes (`ConvexPolyhedron` holds `Vec`s) and are written for its
 //! own f32 rounding, so a board's answer and the host's would not be tied
-//! to one implementation; this one is 200 lines and its cost is in
-//! BENCHMARKS.md. The host's checker measures hulls independently, by
+//! to one implementation; this one (GJK and the faces) is 500 lines and
+//! its cost is in BENCHMARKS.md. The host's checker measures hulls independently, by
 //! their enumerated faces in f64 (`host-sim/src/polytope.rs`).
 
-use crate::math::{sqrt_inline as sqrt, vec3, Vec3};
+use crate::math::{max, min, norm, sqrt_inline as sqrt, vec3, Vec3};
 
 /// Most hulls a scenario holds.
 pub const MAX_HULLS: usize = 8;
@@ -45,6 +53,20 @@ pub const MIN_HULL_VERTICES: usize = 4;
 /// strictly improves the bound, so in exact arithmetic the vertex count
 /// bounds them; in f32 it ends at rounding well before this.
 pub const MAX_GJK_ITERATIONS: usize = 24;
+
+/// Most faces (distinct supporting planes through three vertices) a
+/// hull's topology holds: a box has 6, a 16-vertex prism 10, a 32-vertex
+/// 16-gon prism 18. A hull with more is measured by GJK alone.
+pub const MAX_HULL_FACES: usize = 32;
+/// Most edges (vertex pairs on two faces) a hull's topology holds: a box
+/// has 12, a 16-vertex prism 24, a 32-vertex 16-gon prism 48.
+pub const MAX_HULL_EDGES: usize = 48;
+
+/// How far (relative to the hull's largest vertex spread) a vertex may lie
+/// off a face's plane and still be on it, and how far beyond the planes a
+/// face's projection may fall and still be taken: far above f32 rounding,
+/// far below any margin.
+const TOPOLOGY_TOLERANCE: f32 = 1.0e-5;
 
 /// Direction cells of the support's candidate lists: the 6 faces of the
 /// cube of directions, each cut in 4 by the signs of its other two axes.
@@ -127,6 +149,34 @@ pub struct Hull {
     /// vertex no single other vertex beats over the whole cell by
     /// [`CELL_MARGIN`].
     candidates: [u32; DIRECTION_CELLS],
+    /// The faces, for [`Hull::distance`]'s first try (empty when the hull
+    /// has more than [`MAX_HULL_FACES`] or [`MAX_HULL_EDGES`]).
+    faces: heapless::Vec<Face, MAX_HULL_FACES>,
+    /// The edges: vertex pairs on two faces.
+    edges: heapless::Vec<Edge, MAX_HULL_EDGES>,
+    /// Each face's edges (indices into `edges`), face by face: face `f`'s
+    /// are `face_edges[face_start[f]..face_start[f + 1]]`.
+    face_edges: [u8; 2 * MAX_HULL_EDGES],
+    /// See `face_edges`.
+    face_start: [u8; MAX_HULL_FACES + 1],
+    /// [`TOPOLOGY_TOLERANCE`] times the largest vertex spread, length units.
+    tolerance: f32,
+}
+
+/// A face: its plane `normal . p = offset` (unit outward normal; the offset
+/// the largest `normal . v` of the vertices, so every vertex is on or
+/// behind it as f32 computes it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Face {
+    normal: Vec3,
+    offset: f32,
+}
+
+/// An edge: its two vertices and its two faces (indices).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Edge {
+    ends: [u8; 2],
+    faces: [u8; 2],
 }
 
 /// The distance from a point to a hull, [`Hull::distance`].
@@ -148,6 +198,34 @@ impl Hull {
     /// that span a volume. Vertices inside the hull are kept (they cost a
     /// dot product a query and change no answer).
     pub fn new(vertices: &[[f32; 3]]) -> Result<Self, HullError> {
+        let mut hull = Hull::empty();
+        hull.set(vertices)?;
+        Ok(hull)
+    }
+
+    /// A hull of no vertices (a placeholder: [`Hull::set`] fills it).
+    pub fn empty() -> Self {
+        Hull {
+            vertices: heapless::Vec::new(),
+            half_box: Vec3::zeros(),
+            mean: Vec3::zeros(),
+            half_width: 0.0,
+            candidates: [0; DIRECTION_CELLS],
+            faces: heapless::Vec::new(),
+            edges: heapless::Vec::new(),
+            face_edges: [0; 2 * MAX_HULL_EDGES],
+            face_start: [0; MAX_HULL_FACES + 1],
+            tolerance: 0.0,
+        }
+    }
+
+    /// [`Hull::new`] in place (a hull is over a kilobyte: a board builds
+    /// its hulls where they live, never on its stack). On an error the
+    /// hull is left empty.
+    pub fn set(&mut self, vertices: &[[f32; 3]]) -> Result<(), HullError> {
+        self.vertices.clear();
+        self.faces.clear();
+        self.edges.clear();
         if vertices.len() < MIN_HULL_VERTICES {
             return Err(HullError::TooFewVertices);
         }
@@ -166,7 +244,6 @@ impl Hull {
         {
             return Err(HullError::OutOfRange);
         }
-        let mut kept = heapless::Vec::new();
         let first = vec3(vertices.first().copied().unwrap_or_default());
         let (mut low, mut high) = (first, first);
         let mut sum = Vec3::zeros();
@@ -175,21 +252,38 @@ impl Hull {
             low = low.inf(&v);
             high = high.sup(&v);
             sum += v;
-            let _ = kept.push(v);
+            let _ = self.vertices.push(v);
         }
         let widths = high - low;
         let half_width = 0.5 * widths.min();
-        if half_width < 0.5 * super::MIN_SEMI_AXIS || !spans_a_volume(&kept, widths.max()) {
+        if half_width < 0.5 * super::MIN_SEMI_AXIS || !spans_a_volume(&self.vertices, widths.max())
+        {
+            self.vertices.clear();
             return Err(HullError::Flat);
         }
-        let half_box = low.abs().sup(&high.abs());
-        Ok(Hull {
-            half_box,
-            mean: sum / kept.len() as f32,
-            candidates: candidates(&kept, CELL_MARGIN * half_box.max()),
-            vertices: kept,
-            half_width,
-        })
+        self.half_box = low.abs().sup(&high.abs());
+        self.mean = sum / self.vertices.len() as f32;
+        self.half_width = half_width;
+        self.candidates = candidates(&self.vertices, CELL_MARGIN * self.half_box.max());
+        self.tolerance = TOPOLOGY_TOLERANCE * widths.max();
+        if topology(
+            &self.vertices,
+            self.tolerance,
+            &mut self.faces,
+            &mut self.edges,
+        )
+        .is_none()
+        {
+            self.faces.clear();
+            self.edges.clear();
+        }
+        edges_by_face(
+            self.faces.len(),
+            &self.edges,
+            &mut self.face_edges,
+            &mut self.face_start,
+        );
+        Ok(())
     }
 
     /// The vertices, the obstacle's frame.
@@ -266,11 +360,152 @@ impl Hull {
         }
     }
 
+    /// The distance from `x` (the obstacle's frame) to the hull: by its
+    /// faces and edges when it has them and they give a certified answer
+    /// ([`Hull::by_faces`]), else by GJK ([`Hull::by_gjk`]).
+    pub fn distance(&self, x: &Vec3) -> HullDistance {
+        self.by_faces(x).unwrap_or_else(|| self.by_gjk(x))
+    }
+
+    /// Whether the hull has a topology ([`Hull::by_faces`] can answer).
+    pub fn has_faces(&self) -> bool {
+        !self.faces.is_empty()
+    }
+
+    /// The distance from `x` outside the hull by its faces and edges, when
+    /// that is certified; `None` sends the query to GJK (inside, a point
+    /// not finite, no topology, or an answer no check certified).
+    ///
+    /// Every face's height `h_f = n_f . x - offset_f` bounds the distance
+    /// below (the hull is behind each plane). If `x`'s projection on the
+    /// highest face's plane is behind every other plane (`h_g - h* (n_g .
+    /// n*)` at most the tolerance), it is on the hull and the distance is
+    /// `h*`, the normal `n*`. Otherwise the closest point is on an edge: first
+    /// the edge between the highest face and the first plane the projection
+    /// is beyond, then each edge of the highest face ([`Hull::from_edge`]
+    /// certifies each).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    fn by_faces(&self, x: &Vec3) -> Option<HullDistance> {
+        let (mut top, mut highest) = (f32::NEG_INFINITY, 0usize);
+        for (f, face) in self.faces.iter().enumerate() {
+            let height = face.normal.dot(x) - face.offset;
+            if height > top {
+                (top, highest) = (height, f);
+            }
+        }
+        // Inside, NaN or no faces: GJK's answer.
+        if !(top > 0.0) {
+            return None;
+        }
+        let face = self.faces.get(highest)?;
+        // The face's polygon is its plane behind its neighbours' planes
+        // (the faces across its edges): test those alone.
+        let own = self.edges_of(highest);
+        let beyond = own.iter().find_map(|&e| {
+            let edge = self.edges.get(e as usize)?;
+            let other = if edge.faces[0] as usize == highest {
+                edge.faces[1]
+            } else {
+                edge.faces[0]
+            };
+            let g = self.faces.get(other as usize)?;
+            (g.normal.dot(x) - g.offset - top * g.normal.dot(&face.normal) > self.tolerance)
+                .then_some(edge)
+        });
+        let Some(edge) = beyond else {
+            return Some(HullDistance {
+                distance: top,
+                normal: face.normal,
+                lower_bound: top,
+            });
+        };
+        if let Some(found) = self.from_edge(x, edge, top) {
+            return Some(found);
+        }
+        // Not that edge's region: the closest of the face's edges, checked
+        // once.
+        let mut closest = (f32::INFINITY, edge);
+        for edge in own.iter().filter_map(|&e| self.edges.get(e as usize)) {
+            let (_, distance_sq, _) = self.closest_on(x, edge)?;
+            if distance_sq < closest.0 {
+                closest = (distance_sq, edge);
+            }
+        }
+        self.from_edge(x, closest.1, top)
+    }
+
+    /// `edge`'s point closest to `x`, its squared distance, and whether it
+    /// is inside the edge (not an end).
+    fn closest_on(&self, x: &Vec3, edge: &Edge) -> Option<(Vec3, f32, bool)> {
+        let a = *self.vertices.get(edge.ends[0] as usize)?;
+        let b = *self.vertices.get(edge.ends[1] as usize)?;
+        let ab = b - a;
+        let along = (x - a).dot(&ab);
+        let length_sq = ab.dot(&ab);
+        let interior = along > 0.0 && along < length_sq;
+        let q = if interior {
+            a + ab * (along / length_sq)
+        } else if along <= 0.0 {
+            a
+        } else {
+            b
+        };
+        let r = x - q;
+        Some((q, r.dot(&r), interior))
+    }
+
+    /// Face `f`'s edges (indices into `edges`).
+    fn edges_of(&self, f: usize) -> &[u8] {
+        let start = self.face_start.get(f).copied().unwrap_or(0) as usize;
+        let end = self.face_start.get(f + 1).copied().unwrap_or(0) as usize;
+        self.face_edges.get(start..end).unwrap_or(&[])
+    }
+
+    /// The distance from `x` to `edge`'s closest point `q`, when `q` is
+    /// certified the hull's closest point: inside the edge, when `x - q` is
+    /// in the cone of its two faces' normals (`x - q = a n_1 + b n_2`, `a`
+    /// and `b` not negative: `x` in the edge's Voronoi region); at a vertex,
+    /// when every vertex is behind the plane through `q` normal to `x - q`
+    /// (GJK's test). `top`, the highest face's height, is a lower bound
+    /// whatever the answer.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    fn from_edge(&self, x: &Vec3, edge: &Edge, top: f32) -> Option<HullDistance> {
+        let (q, distance_sq, interior) = self.closest_on(x, edge)?;
+        let r = x - q;
+        if !(distance_sq > 0.0) {
+            return None;
+        }
+        let distance = sqrt(distance_sq);
+        let normal = r / distance;
+        let certified = if interior {
+            let n1 = self.faces.get(edge.faces[0] as usize)?.normal;
+            let n2 = self.faces.get(edge.faces[1] as usize)?.normal;
+            let m = n1.cross(&n2);
+            let slack = -self.tolerance * m.dot(&m);
+            normal.cross(&n2).dot(&m) >= slack && n1.cross(&normal).dot(&m) >= slack
+        } else {
+            let reach = self
+                .vertices
+                .iter()
+                .fold(f32::NEG_INFINITY, |m, v| max(m, normal.dot(v)));
+            normal.dot(x) - reach >= distance - self.tolerance
+        };
+        if !certified {
+            return None;
+        }
+        Some(HullDistance {
+            distance,
+            normal,
+            // Certified: the distance to rounding (a few ulps below it).
+            lower_bound: min(max(top, distance * (1.0 - 4.0 * f32::EPSILON)), distance),
+        })
+    }
+
     /// The distance from `x` (the obstacle's frame) to the hull, by GJK:
     /// see the module docs. At most [`MAX_GJK_ITERATIONS`] supports.
     // `!(v_sq > 0.0)`: NaN (a point not finite) ends the search too.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    pub fn distance(&self, x: &Vec3) -> HullDistance {
+    pub fn by_gjk(&self, x: &Vec3) -> HullDistance {
         // The simplex holds support points relative to `x` (the Minkowski
         // difference hull - x), so the closest point to the origin is
         // sought, and the vertices they are (to stop when one comes back).
@@ -385,6 +620,147 @@ fn direction_cell(d: &Vec3) -> Option<usize> {
         (2, z, x, y)
     };
     Some(axis * 8 + (major >> 31) as usize * 4 + (u >> 31) as usize * 2 + (w >> 31) as usize)
+}
+
+/// The hull's faces and edges, or `None` when it has more than
+/// [`MAX_HULL_FACES`] or [`MAX_HULL_EDGES`]. A face is the plane through
+/// three vertices with every vertex within `tolerance` behind it (its
+/// offset then the largest `normal . v`), found once however many of its
+/// vertices' triples give it (a triple all on a face found is that face); an edge is a vertex pair within `tolerance`
+/// of two faces' planes; `None` too when they do not make a polytope's
+/// boundary (see the end). Brute force, at most 4 960 triples and 496 pairs
+/// for 32 vertices, once when the hull is built; a wrong or missing face
+/// or edge can only send a query to GJK or take a lower bound below the
+/// distance (see [`Hull::by_faces`]).
+fn topology(
+    vertices: &[Vec3],
+    tolerance: f32,
+    faces: &mut heapless::Vec<Face, MAX_HULL_FACES>,
+    edges: &mut heapless::Vec<Edge, MAX_HULL_EDGES>,
+) -> Option<()> {
+    for (i, &a) in vertices.iter().enumerate() {
+        for (j, &b) in vertices.iter().enumerate().skip(i + 1) {
+            for &c in vertices.iter().skip(j + 1) {
+                let cross = (b - a).cross(&(c - a));
+                let length = sqrt(cross.dot(&cross));
+                // A triangle too thin to give its plane's direction.
+                if !(length > tolerance * max(norm(&(b - a)), norm(&(c - a)))) {
+                    continue;
+                }
+                let unit = cross / length;
+                let (mut low, mut high) = (0.0f32, 0.0f32);
+                for v in vertices {
+                    let side = unit.dot(&(v - a));
+                    low = min(low, side);
+                    high = max(high, side);
+                    if low < -tolerance && high > tolerance {
+                        break;
+                    }
+                }
+                let normal = if high <= tolerance {
+                    unit
+                } else if low >= -tolerance {
+                    -unit
+                } else {
+                    continue;
+                };
+                // The same facet from another three of its vertices: all
+                // three on a face found (by their distances, not the
+                // normals': two facets may meet at a very flat edge).
+                let on = |f: &Face, v: &Vec3| f.offset - f.normal.dot(v) <= tolerance;
+                if faces
+                    .iter()
+                    .any(|f| f.normal.dot(&normal) > 0.0 && on(f, &a) && on(f, &b) && on(f, &c))
+                {
+                    continue;
+                }
+                let offset = vertices
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |m, v| max(m, normal.dot(v)));
+                faces.push(Face { normal, offset }).ok()?;
+            }
+        }
+    }
+    for (i, a) in vertices.iter().enumerate() {
+        for (j, b) in vertices.iter().enumerate().skip(i + 1) {
+            let mut shared = [0u8; 2];
+            let mut count = 0;
+            for (f, face) in faces.iter().enumerate() {
+                let on = |v: &Vec3| face.offset - face.normal.dot(v) <= tolerance;
+                if on(a) && on(b) {
+                    if let Some(slot) = shared.get_mut(count) {
+                        *slot = f as u8;
+                    }
+                    count += 1;
+                }
+            }
+            // On three faces or more: the tolerance joined what is not one
+            // edge; the hull is left to GJK.
+            if count > 2 {
+                return None;
+            }
+            if count == 2 {
+                edges
+                    .push(Edge {
+                        ends: [i as u8, j as u8],
+                        faces: shared,
+                    })
+                    .ok()?;
+            }
+        }
+    }
+    // A polytope's boundary: every face a polygon of at least three edges,
+    // and Euler's V - E + F = 2 (V the vertices on three faces or more; a
+    // vertex midway along an edge or inside a face breaks it, and the
+    // hull is left to GJK).
+    let corners = vertices
+        .iter()
+        .filter(|v| {
+            faces
+                .iter()
+                .filter(|f| f.offset - f.normal.dot(v) <= tolerance)
+                .count()
+                >= 3
+        })
+        .count();
+    let sides_ok = (0..faces.len()).all(|f| {
+        edges
+            .iter()
+            .filter(|edge| edge.faces.contains(&(f as u8)))
+            .count()
+            >= 3
+    });
+    if !sides_ok || corners + faces.len() != edges.len() + 2 {
+        return None;
+    }
+    Some(())
+}
+
+/// Each face's edges, face by face (see [`Hull`]'s `face_edges`).
+fn edges_by_face(
+    faces: usize,
+    edges: &[Edge],
+    list: &mut [u8; 2 * MAX_HULL_EDGES],
+    start: &mut [u8; MAX_HULL_FACES + 1],
+) {
+    list.fill(0);
+    let mut next = 0usize;
+    for f in 0..faces.min(MAX_HULL_FACES) {
+        if let Some(slot) = start.get_mut(f) {
+            *slot = next as u8;
+        }
+        for (e, edge) in edges.iter().enumerate() {
+            if edge.faces.contains(&(f as u8)) {
+                if let Some(slot) = list.get_mut(next) {
+                    *slot = e as u8;
+                    next += 1;
+                }
+            }
+        }
+    }
+    for slot in start.iter_mut().skip(faces.min(MAX_HULL_FACES)) {
+        *slot = next as u8;
+    }
 }
 
 /// Each direction cell's support candidates: vertex `i` is left out of a
@@ -812,6 +1188,129 @@ mod tests {
             }
         }
         assert!(checked > 1500, "only {checked} outside points");
+    }
+
+    #[test]
+    fn the_faces_answer_most_queries_and_agree_with_the_oracle_and_gjk() {
+        let mut state = 11u64;
+        let (mut answered, mut outside, mut with_faces, mut without) = (0, 0, 0, 0);
+        let mut prism = [[0.0f32; 3]; 16];
+        for (i, v) in prism.iter_mut().enumerate() {
+            let angle = core::f32::consts::FRAC_PI_4 * (i % 8) as f32 + 0.3;
+            *v = [
+                20.0 * angle.cos(),
+                15.0 * angle.sin(),
+                if i < 8 { 10.0 } else { -10.0 },
+            ];
+        }
+        for case in 0..300 {
+            let count = 4 + case % 29;
+            let size = [
+                1.0 + 3.0 * lcg(&mut state),
+                0.5 + 2.0 * lcg(&mut state),
+                1.0 + lcg(&mut state),
+            ];
+            let points: heapless::Vec<[f32; 3], 32> = if case % 10 == 0 {
+                prism.iter().copied().collect()
+            } else {
+                random_points(&mut state, count, size)
+            };
+            let Ok(hull) = Hull::new(&points) else {
+                continue;
+            };
+            if !hull.has_faces() {
+                without += 1;
+                continue;
+            }
+            with_faces += 1;
+            let scale_of = [0, 1, 2].map(|i| points.iter().map(|p| p[i].abs()).fold(0.0, f32::max));
+            for _ in 0..20 {
+                let x = [0, 1, 2].map(|i| (2.0 * lcg(&mut state) - 1.0) * 2.0 * scale_of[i]);
+                let p = x.map(f64::from);
+                if brute_inside(&points, p) {
+                    continue;
+                }
+                outside += 1;
+                let Some(got) = hull.by_faces(&vec3(x)) else {
+                    continue;
+                };
+                answered += 1;
+                let want = brute_distance(&points, p);
+                let scale = 1.0 + want;
+                assert!(
+                    (got.distance as f64 - want).abs() <= 2e-5 * scale,
+                    "case {case} x {x:?}: {} against {want}",
+                    got.distance
+                );
+                assert!(got.lower_bound <= got.distance);
+                assert!(got.lower_bound as f64 >= want - 2e-5 * scale);
+                assert!((got.normal.norm() - 1.0).abs() < 1e-5);
+                let gjk = hull.by_gjk(&vec3(x));
+                assert!((got.distance - gjk.distance).abs() <= 2e-5 * scale as f32);
+                assert!(
+                    (got.normal - gjk.normal).norm() <= 1e-3,
+                    "case {case} x {x:?}"
+                );
+            }
+        }
+        // Random hulls of up to 32 points often have more faces than the
+        // topology holds; boxes, prisms and small hulls do not.
+        assert!(
+            with_faces > 100 && without > 10,
+            "{with_faces} with faces, {without} without"
+        );
+        assert!(
+            answered * 100 >= 95 * outside,
+            "the faces answered {answered} of {outside} outside points"
+        );
+    }
+
+    #[test]
+    fn a_prism_has_its_faces_and_edges() {
+        let mut prism = [[0.0f32; 3]; 16];
+        for (i, v) in prism.iter_mut().enumerate() {
+            let angle = core::f32::consts::FRAC_PI_4 * (i % 8) as f32 + 0.3;
+            *v = [
+                20.0 * angle.cos(),
+                15.0 * angle.sin(),
+                if i < 8 { 10.0 } else { -10.0 },
+            ];
+        }
+        let hull = Hull::new(&prism).unwrap();
+        assert_eq!((hull.faces.len(), hull.edges.len()), (10, 24));
+        // BENCHMARKS.md's 96 points round it (a spiral at 30 from its
+        // centre): every one answered by the faces, as GJK answers it.
+        for i in 0..96u32 {
+            let z = 1.0 - (2.0 * i as f32 + 1.0) / 96.0;
+            let ring = (1.0 - z * z).sqrt();
+            let (s, c) = crate::math::sin_cos(2.399_963 * i as f32);
+            let x = Vec3::new(30.0 * ring * c, 30.0 * ring * s, 30.0 * z);
+            let got = hull.by_faces(&x).unwrap();
+            let gjk = hull.by_gjk(&x);
+            assert!(
+                (got.distance - gjk.distance).abs() < 1e-4,
+                "{x:?}: {got:?} {gjk:?}"
+            );
+            assert!(
+                (got.normal - gjk.normal).norm() < 1e-3,
+                "{x:?}: {got:?} {gjk:?}"
+            );
+        }
+        let corners: [[f32; 3]; 8] = core::array::from_fn(|i| {
+            [0, 1, 2].map(|axis| if i >> axis & 1 == 0 { 1.0 } else { -1.0 })
+        });
+        let cube = Hull::new(&corners).unwrap();
+        assert_eq!((cube.faces.len(), cube.edges.len()), (6, 12));
+        // Off a corner, an edge and a face of the cube: the corner's, the
+        // edge's and the face's distances.
+        for (x, want) in [
+            ([2.0, 2.0, 2.0], 3.0f32.sqrt()),
+            ([2.0, 2.0, 0.5], 2.0f32.sqrt()),
+            ([0.2, -0.3, 3.0], 2.0),
+        ] {
+            let got = cube.by_faces(&vec3(x)).unwrap();
+            assert!((got.distance - want).abs() < 1e-6, "{x:?}: {got:?}");
+        }
     }
 
     /// The first farthest vertex by a plain scan of every vertex, as the
