@@ -381,9 +381,9 @@ impl Hull {
     /// highest face's plane is behind every other plane (`h_g - h* (n_g .
     /// n*)` at most the tolerance), it is on the hull and the distance is
     /// `h*`, the normal `n*`. Otherwise the closest point is on an edge: first
-    /// the edge between the highest face and the first plane the projection
-    /// is beyond, then each edge of the highest face ([`Hull::from_edge`]
-    /// certifies each).
+    /// the edge between the highest face and the first neighbour whose plane
+    /// the projection is beyond, else the closest of the face's edges, each
+    /// certified by `Hull::certified_edge`.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn by_faces(&self, x: &Vec3) -> Option<HullDistance> {
         let (mut top, mut highest) = (f32::NEG_INFINITY, 0usize);
@@ -419,7 +419,7 @@ impl Hull {
                 lower_bound: top,
             });
         };
-        if let Some(found) = self.from_edge(x, edge, top) {
+        if let Some(found) = self.certified_edge(x, edge, top) {
             return Some(found);
         }
         // Not that edge's region: the closest of the face's edges, checked
@@ -431,7 +431,7 @@ impl Hull {
                 closest = (distance_sq, edge);
             }
         }
-        self.from_edge(x, closest.1, top)
+        self.certified_edge(x, closest.1, top)
     }
 
     /// `edge`'s point closest to `x`, its squared distance, and whether it
@@ -469,7 +469,7 @@ impl Hull {
     /// (GJK's test). `top`, the highest face's height, is a lower bound
     /// whatever the answer.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    fn from_edge(&self, x: &Vec3, edge: &Edge, top: f32) -> Option<HullDistance> {
+    fn certified_edge(&self, x: &Vec3, edge: &Edge, top: f32) -> Option<HullDistance> {
         let (q, distance_sq, interior) = self.closest_on(x, edge)?;
         let r = x - q;
         if !(distance_sq > 0.0) {
@@ -632,6 +632,8 @@ fn direction_cell(d: &Vec3) -> Option<usize> {
 /// for 32 vertices, once when the hull is built; a wrong or missing face
 /// or edge can only send a query to GJK or take a lower bound below the
 /// distance (see [`Hull::by_faces`]).
+// `!(length > ..)`: a NaN length is too thin too.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn topology(
     vertices: &[Vec3],
     tolerance: f32,
