@@ -14,10 +14,10 @@
 //! by brute force, when the hull is built: at most [`MAX_HULL_FACES`] and
 //! [`MAX_HULL_EDGES`]): the highest face's plane and its neighbours' planes
 //! give the distance when `x` is over the face, and otherwise one of its
-//! edges (or an edge's end) certified the closest point by its Voronoi
+//! edges (or an edge's end) is certified the closest point by its Voronoi
 //! region (`Hull::by_faces`). On the 16-vertex prism of `BENCHMARKS.md`
-//! every query outside is answered so, at about half GJK's cost (602 M4F
-//! instructions a query against 1 079). Where that certifies nothing
+//! every query outside is answered so, at about half GJK's cost (550 M4F
+//! instructions a query against 1 080). Where that certifies nothing
 //! (inside, a hull beyond the limits, rounding at a region's border) GJK
 //! answers: each iteration takes the vertex farthest along the search
 //! direction (the support, one dot product a vertex) and the closest point of the simplex
@@ -159,6 +159,10 @@ pub struct Hull {
     face_edges: [u8; 2 * MAX_HULL_EDGES],
     /// See `face_edges`.
     face_start: [u8; MAX_HULL_FACES + 1],
+    /// Each vertex's edges, vertex by vertex, as `face_edges`.
+    vertex_edges: [u8; 2 * MAX_HULL_EDGES],
+    /// See `vertex_edges`.
+    vertex_start: [u8; MAX_HULL_VERTICES + 1],
     /// [`TOPOLOGY_TOLERANCE`] times the largest vertex spread, length units.
     tolerance: f32,
 }
@@ -215,6 +219,8 @@ impl Hull {
             edges: heapless::Vec::new(),
             face_edges: [0; 2 * MAX_HULL_EDGES],
             face_start: [0; MAX_HULL_FACES + 1],
+            vertex_edges: [0; 2 * MAX_HULL_EDGES],
+            vertex_start: [0; MAX_HULL_VERTICES + 1],
             tolerance: 0.0,
         }
     }
@@ -277,11 +283,19 @@ impl Hull {
             self.faces.clear();
             self.edges.clear();
         }
-        edges_by_face(
+        edges_by(
             self.faces.len(),
             &self.edges,
+            |edge| edge.faces,
             &mut self.face_edges,
             &mut self.face_start,
+        );
+        edges_by(
+            self.vertices.len(),
+            &self.edges,
+            |edge| edge.ends,
+            &mut self.vertex_edges,
+            &mut self.vertex_start,
         );
         Ok(())
     }
@@ -399,7 +413,9 @@ impl Hull {
         }
         let face = self.faces.get(highest)?;
         // The face's polygon is its plane behind its neighbours' planes
-        // (the faces across its edges): test those alone.
+        // (the faces across its edges): test those alone, at `x`'s
+        // projection `y` on the face's plane.
+        let y = x - face.normal * top;
         let own = self.edges_of(highest);
         let beyond = own.iter().find_map(|&e| {
             let edge = self.edges.get(e as usize)?;
@@ -409,8 +425,7 @@ impl Hull {
                 edge.faces[0]
             };
             let g = self.faces.get(other as usize)?;
-            (g.normal.dot(x) - g.offset - top * g.normal.dot(&face.normal) > self.tolerance)
-                .then_some(edge)
+            (g.normal.dot(&y) - g.offset > self.tolerance).then_some(edge)
         });
         let Some(edge) = beyond else {
             return Some(HullDistance {
@@ -454,6 +469,13 @@ impl Hull {
         Some((q, r.dot(&r), interior))
     }
 
+    /// Vertex `v`'s edges (indices into `edges`).
+    fn edges_at(&self, v: usize) -> &[u8] {
+        let start = self.vertex_start.get(v).copied().unwrap_or(0) as usize;
+        let end = self.vertex_start.get(v + 1).copied().unwrap_or(0) as usize;
+        self.vertex_edges.get(start..end).unwrap_or(&[])
+    }
+
     /// Face `f`'s edges (indices into `edges`).
     fn edges_of(&self, f: usize) -> &[u8] {
         let start = self.face_start.get(f).copied().unwrap_or(0) as usize;
@@ -465,8 +487,9 @@ impl Hull {
     /// certified the hull's closest point: inside the edge, when `x - q` is
     /// in the cone of its two faces' normals (`x - q = a n_1 + b n_2`, `a`
     /// and `b` not negative: `x` in the edge's Voronoi region); at a vertex,
-    /// when every vertex is behind the plane through `q` normal to `x - q`
-    /// (GJK's test). `top`, the highest face's height, is a lower bound
+    /// when `x - q` makes no acute angle with any of the vertex's edges
+    /// (they span the hull's directions from a vertex, so no hull point is
+    /// nearer). `top`, the highest face's height, is a lower bound
     /// whatever the answer.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn certified_edge(&self, x: &Vec3, edge: &Edge, top: f32) -> Option<HullDistance> {
@@ -484,11 +507,25 @@ impl Hull {
             let slack = -self.tolerance * m.dot(&m);
             normal.cross(&n2).dot(&m) >= slack && n1.cross(&normal).dot(&m) >= slack
         } else {
-            let reach = self
-                .vertices
-                .iter()
-                .fold(f32::NEG_INFINITY, |m, v| max(m, normal.dot(v)));
-            normal.dot(x) - reach >= distance - self.tolerance
+            // At a vertex `q`: `x - q` makes no acute angle with any of its
+            // edges (they span the hull's directions from `q`).
+            let end = if along_end(q, self.vertices.get(edge.ends[0] as usize)) {
+                edge.ends[0]
+            } else {
+                edge.ends[1]
+            };
+            self.edges_at(end as usize).iter().all(|&e| {
+                self.edges.get(e as usize).is_some_and(|other| {
+                    let far = if other.ends[0] == end {
+                        other.ends[1]
+                    } else {
+                        other.ends[0]
+                    };
+                    self.vertices
+                        .get(far as usize)
+                        .is_some_and(|w| r.dot(&(w - q)) <= self.tolerance * distance)
+                })
+            })
         };
         if !certified {
             return None;
@@ -738,21 +775,30 @@ fn topology(
     Some(())
 }
 
-/// Each face's edges, face by face (see [`Hull`]'s `face_edges`).
-fn edges_by_face(
-    faces: usize,
+/// Whether `q` is the vertex `v`.
+fn along_end(q: Vec3, v: Option<&Vec3>) -> bool {
+    v.is_some_and(|v| *v == q)
+}
+
+/// The edges of each face (or vertex), face by face: `of(edge)` names the
+/// two an edge belongs to; `start[k]..start[k + 1]` indexes `list` for
+/// the `k`-th of `count`.
+fn edges_by<const S: usize>(
+    count: usize,
     edges: &[Edge],
+    of: impl Fn(&Edge) -> [u8; 2],
     list: &mut [u8; 2 * MAX_HULL_EDGES],
-    start: &mut [u8; MAX_HULL_FACES + 1],
+    start: &mut [u8; S],
 ) {
     list.fill(0);
+    let count = count.min(S.saturating_sub(1));
     let mut next = 0usize;
-    for f in 0..faces.min(MAX_HULL_FACES) {
-        if let Some(slot) = start.get_mut(f) {
+    for k in 0..count {
+        if let Some(slot) = start.get_mut(k) {
             *slot = next as u8;
         }
         for (e, edge) in edges.iter().enumerate() {
-            if edge.faces.contains(&(f as u8)) {
+            if of(edge).contains(&(k as u8)) {
                 if let Some(slot) = list.get_mut(next) {
                     *slot = e as u8;
                     next += 1;
@@ -760,7 +806,7 @@ fn edges_by_face(
             }
         }
     }
-    for slot in start.iter_mut().skip(faces.min(MAX_HULL_FACES)) {
+    for slot in start.iter_mut().skip(count) {
         *slot = next as u8;
     }
 }
