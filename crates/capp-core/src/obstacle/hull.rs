@@ -1091,6 +1091,40 @@ mod tests {
         ((*state >> 40) as f32) / (1u64 << 24) as f32
     }
 
+    /// Checks `got` (the query at `p`, outside the hull of `points`)
+    /// against the brute-force distance: the distance and the lower bound
+    /// within `2e-5 (1 + d)`. Returns the oracle's distance and that scale.
+    fn agrees_with_the_oracle(
+        points: &[[f32; 3]],
+        p: [f64; 3],
+        got: &HullDistance,
+        case: usize,
+    ) -> (f64, f64) {
+        let want = brute_distance(points, p);
+        let scale = 1.0 + want;
+        assert!(
+            (got.distance as f64 - want).abs() <= 2e-5 * scale,
+            "case {case} p {p:?}: {} against {want}",
+            got.distance
+        );
+        assert!(got.lower_bound as f64 <= want + 2e-5 * scale);
+        assert!(
+            got.lower_bound as f64 >= want - 2e-5 * scale,
+            "lower {} against {want}: case {case} p {p:?} points {points:?}",
+            got.lower_bound
+        );
+        (want, scale)
+    }
+
+    /// Random half-extents for a hull's points: 1-4 by 0.5-2.5 by 1-2.
+    fn random_size(state: &mut u64) -> [f32; 3] {
+        [
+            1.0 + 3.0 * lcg(state),
+            0.5 + 2.0 * lcg(state),
+            1.0 + lcg(state),
+        ]
+    }
+
     /// `count` random points in a box of half-extents `size`, off the origin.
     fn random_points(state: &mut u64, count: usize, size: [f32; 3]) -> heapless::Vec<[f32; 3], 32> {
         let mut points = heapless::Vec::new();
@@ -1198,11 +1232,7 @@ mod tests {
         let mut checked = 0;
         for case in 0..300 {
             let count = 4 + case % 17;
-            let size = [
-                1.0 + 3.0 * lcg(&mut state),
-                0.5 + 2.0 * lcg(&mut state),
-                1.0 + lcg(&mut state),
-            ];
+            let size = random_size(&mut state);
             let points = random_points(&mut state, count, size);
             let Ok(hull) = Hull::new(&points) else {
                 continue;
@@ -1215,19 +1245,7 @@ mod tests {
                     assert_eq!(got.distance, 0.0, "case {case} x {x:?}: inside");
                     continue;
                 }
-                let want = brute_distance(&points, p);
-                let scale = 1.0 + want;
-                assert!(
-                    (got.distance as f64 - want).abs() <= 2e-5 * scale,
-                    "case {case} x {x:?}: {} against {want}",
-                    got.distance
-                );
-                assert!(got.lower_bound as f64 <= want + 2e-5 * scale);
-                assert!(
-                    got.lower_bound as f64 >= want - 2e-5 * scale,
-                    "lower {} against {want}: case {case} count {count} x {x:?} points {points:?}",
-                    got.lower_bound
-                );
+                let (_, scale) = agrees_with_the_oracle(&points, p, &got, case);
                 // The normal leads from the closest point to x.
                 let closest = vec3(x) - got.normal * got.distance;
                 assert!((got.normal.norm() - 1.0).abs() < 1e-5);
@@ -1238,26 +1256,27 @@ mod tests {
         assert!(checked > 1500, "only {checked} outside points");
     }
 
+    /// BENCHMARKS.md's 16-vertex hull: an octagonal prism, its octagon's
+    /// corners on the ellipse of semi-axes 20 and 15, z = +-10.
+    fn octagonal_prism() -> [[f32; 3]; 16] {
+        core::array::from_fn(|i| {
+            let angle = core::f32::consts::FRAC_PI_4 * (i % 8) as f32 + 0.3;
+            [
+                20.0 * angle.cos(),
+                15.0 * angle.sin(),
+                if i < 8 { 10.0 } else { -10.0 },
+            ]
+        })
+    }
+
     #[test]
     fn the_faces_answer_most_queries_and_agree_with_the_oracle_and_gjk() {
         let mut state = 11u64;
         let (mut answered, mut outside, mut with_faces, mut without) = (0, 0, 0, 0);
-        let mut prism = [[0.0f32; 3]; 16];
-        for (i, v) in prism.iter_mut().enumerate() {
-            let angle = core::f32::consts::FRAC_PI_4 * (i % 8) as f32 + 0.3;
-            *v = [
-                20.0 * angle.cos(),
-                15.0 * angle.sin(),
-                if i < 8 { 10.0 } else { -10.0 },
-            ];
-        }
+        let prism = octagonal_prism();
         for case in 0..300 {
             let count = 4 + case % 29;
-            let size = [
-                1.0 + 3.0 * lcg(&mut state),
-                0.5 + 2.0 * lcg(&mut state),
-                1.0 + lcg(&mut state),
-            ];
+            let size = random_size(&mut state);
             let points: heapless::Vec<[f32; 3], 32> = if case % 10 == 0 {
                 prism.iter().copied().collect()
             } else {
@@ -1283,15 +1302,8 @@ mod tests {
                     continue;
                 };
                 answered += 1;
-                let want = brute_distance(&points, p);
-                let scale = 1.0 + want;
-                assert!(
-                    (got.distance as f64 - want).abs() <= 2e-5 * scale,
-                    "case {case} x {x:?}: {} against {want}",
-                    got.distance
-                );
+                let (_, scale) = agrees_with_the_oracle(&points, p, &got, case);
                 assert!(got.lower_bound <= got.distance);
-                assert!(got.lower_bound as f64 >= want - 2e-5 * scale);
                 assert!((got.normal.norm() - 1.0).abs() < 1e-5);
                 let gjk = hull.by_gjk(&vec3(x));
                 assert!((got.distance - gjk.distance).abs() <= 2e-5 * scale as f32);
@@ -1315,15 +1327,7 @@ mod tests {
 
     #[test]
     fn a_prism_has_its_faces_and_edges() {
-        let mut prism = [[0.0f32; 3]; 16];
-        for (i, v) in prism.iter_mut().enumerate() {
-            let angle = core::f32::consts::FRAC_PI_4 * (i % 8) as f32 + 0.3;
-            *v = [
-                20.0 * angle.cos(),
-                15.0 * angle.sin(),
-                if i < 8 { 10.0 } else { -10.0 },
-            ];
-        }
+        let prism = octagonal_prism();
         let hull = Hull::new(&prism).unwrap();
         assert_eq!((hull.faces.len(), hull.edges.len()), (10, 24));
         // BENCHMARKS.md's 96 points round it (a spiral at 30 from its
