@@ -74,7 +74,7 @@ fn vsqrt(x: f32) -> f32 {
 /// Not the default: the fallback call in every caller's code takes flash
 /// (about 20 bytes a root) and, inside a loop whose registers are all
 /// taken, makes the loop dearer where the root is not even reached (the
-/// obstacle pair loop: 370 instructions a PIPS + 8 step).
+/// obstacle pair loop: 380 instructions a PIPS + 8 step).
 #[inline(always)]
 pub fn sqrt_inline(x: f32) -> f32 {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]

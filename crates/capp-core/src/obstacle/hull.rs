@@ -20,8 +20,8 @@
 //! instructions a query against 1 080). Where that certifies nothing
 //! (inside, a hull beyond the limits, rounding at a region's border) GJK
 //! answers: each iteration takes the vertex farthest along the search
-//! direction (the support, one dot product a vertex) and the closest point of the simplex
-//! of at most four support points found so far (Ericson, "Real-Time
+//! direction (the support, one dot product a vertex) and the closest point
+//! of the simplex of at most four support points found so far (Ericson, "Real-Time
 //! Collision Detection", 2005, 5.1.5-5.1.6, by Voronoi regions). It stops
 //! when the support no longer moves the bound by more than f32 rounding, or
 //! after [`MAX_GJK_ITERATIONS`]: the work per query is bounded. It returns
@@ -38,8 +38,8 @@
 //! `alloc` shapes (`ConvexPolyhedron` holds `Vec`s) and are written for its
 //! own f32 rounding, so a board's answer and the host's would not be tied
 //! to one implementation; this one (GJK and the faces) is 500 lines and
-//! its cost is in BENCHMARKS.md. The host's checker measures hulls independently, by
-//! their enumerated faces in f64 (`host-sim/src/polytope.rs`).
+//! its cost is in BENCHMARKS.md. The host's checker measures hulls
+//! independently, by their enumerated faces in f64 (`host-sim/src/polytope.rs`).
 
 use crate::math::{max, min, norm, sqrt_inline as sqrt, vec3, Vec3};
 
@@ -174,6 +174,14 @@ pub struct Hull {
 struct Face {
     normal: Vec3,
     offset: f32,
+}
+
+impl Face {
+    /// Whether `v` is on the face's plane, within `tolerance` (no vertex is
+    /// beyond it).
+    fn holds(&self, v: &Vec3, tolerance: f32) -> bool {
+        self.offset - self.normal.dot(v) <= tolerance
+    }
 }
 
 /// An edge: its two vertices and its two faces (indices).
@@ -376,12 +384,12 @@ impl Hull {
 
     /// The distance from `x` (the obstacle's frame) to the hull: by its
     /// faces and edges when it has them and they give a certified answer
-    /// ([`Hull::by_faces`]), else by GJK ([`Hull::by_gjk`]).
+    /// (`Hull::by_faces`), else by GJK (`Hull::by_gjk`).
     pub fn distance(&self, x: &Vec3) -> HullDistance {
         self.by_faces(x).unwrap_or_else(|| self.by_gjk(x))
     }
 
-    /// Whether the hull has a topology ([`Hull::by_faces`] can answer).
+    /// Whether the hull has a topology (`Hull::by_faces` can answer).
     pub fn has_faces(&self) -> bool {
         !self.faces.is_empty()
     }
@@ -449,24 +457,23 @@ impl Hull {
         self.certified_edge(x, closest.1, top)
     }
 
-    /// `edge`'s point closest to `x`, its squared distance, and whether it
-    /// is inside the edge (not an end).
-    fn closest_on(&self, x: &Vec3, edge: &Edge) -> Option<(Vec3, f32, bool)> {
+    /// `edge`'s point closest to `x`, its squared distance, and the end
+    /// vertex it is (`None` inside the edge).
+    fn closest_on(&self, x: &Vec3, edge: &Edge) -> Option<(Vec3, f32, Option<u8>)> {
         let a = *self.vertices.get(edge.ends[0] as usize)?;
         let b = *self.vertices.get(edge.ends[1] as usize)?;
         let ab = b - a;
         let along = (x - a).dot(&ab);
         let length_sq = ab.dot(&ab);
-        let interior = along > 0.0 && along < length_sq;
-        let q = if interior {
-            a + ab * (along / length_sq)
-        } else if along <= 0.0 {
-            a
+        let (q, end) = if along <= 0.0 {
+            (a, Some(edge.ends[0]))
+        } else if along >= length_sq {
+            (b, Some(edge.ends[1]))
         } else {
-            b
+            (a + ab * (along / length_sq), None)
         };
         let r = x - q;
-        Some((q, r.dot(&r), interior))
+        Some((q, r.dot(&r), end))
     }
 
     /// Vertex `v`'s edges (indices into `edges`).
@@ -493,27 +500,16 @@ impl Hull {
     /// whatever the answer.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn certified_edge(&self, x: &Vec3, edge: &Edge, top: f32) -> Option<HullDistance> {
-        let (q, distance_sq, interior) = self.closest_on(x, edge)?;
+        let (q, distance_sq, end) = self.closest_on(x, edge)?;
         let r = x - q;
         if !(distance_sq > 0.0) {
             return None;
         }
         let distance = sqrt(distance_sq);
         let normal = r / distance;
-        let certified = if interior {
-            let n1 = self.faces.get(edge.faces[0] as usize)?.normal;
-            let n2 = self.faces.get(edge.faces[1] as usize)?.normal;
-            let m = n1.cross(&n2);
-            let slack = -self.tolerance * m.dot(&m);
-            normal.cross(&n2).dot(&m) >= slack && n1.cross(&normal).dot(&m) >= slack
-        } else {
+        let certified = if let Some(end) = end {
             // At a vertex `q`: `x - q` makes no acute angle with any of its
             // edges (they span the hull's directions from `q`).
-            let end = if along_end(q, self.vertices.get(edge.ends[0] as usize)) {
-                edge.ends[0]
-            } else {
-                edge.ends[1]
-            };
             self.edges_at(end as usize).iter().all(|&e| {
                 self.edges.get(e as usize).is_some_and(|other| {
                     let far = if other.ends[0] == end {
@@ -526,6 +522,12 @@ impl Hull {
                         .is_some_and(|w| r.dot(&(w - q)) <= self.tolerance * distance)
                 })
             })
+        } else {
+            let n1 = self.faces.get(edge.faces[0] as usize)?.normal;
+            let n2 = self.faces.get(edge.faces[1] as usize)?.normal;
+            let m = n1.cross(&n2);
+            let slack = -self.tolerance * m.dot(&m);
+            normal.cross(&n2).dot(&m) >= slack && n1.cross(&normal).dot(&m) >= slack
         };
         if !certified {
             return None;
@@ -542,7 +544,7 @@ impl Hull {
     /// see the module docs. At most [`MAX_GJK_ITERATIONS`] supports.
     // `!(v_sq > 0.0)`: NaN (a point not finite) ends the search too.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    pub fn by_gjk(&self, x: &Vec3) -> HullDistance {
+    fn by_gjk(&self, x: &Vec3) -> HullDistance {
         // The simplex holds support points relative to `x` (the Minkowski
         // difference hull - x), so the closest point to the origin is
         // sought, and the vertices they are (to stop when one comes back).
@@ -663,8 +665,8 @@ fn direction_cell(d: &Vec3) -> Option<usize> {
 /// [`MAX_HULL_FACES`] or [`MAX_HULL_EDGES`]. A face is the plane through
 /// three vertices with every vertex within `tolerance` behind it (its
 /// offset then the largest `normal . v`), found once however many of its
-/// vertices' triples give it (a triple all on a face found is that face); an edge is a vertex pair within `tolerance`
-/// of two faces' planes; `None` too when they do not make a polytope's
+/// vertices' triples give it (a triple all on a face found is that face);
+/// an edge is a vertex pair within `tolerance` of two faces' planes; `None` too when they do not make a polytope's
 /// boundary (see the end). Brute force, at most 4 960 triples and 496 pairs
 /// for 32 vertices, once when the hull is built; a wrong or missing face
 /// or edge can only send a query to GJK or take a lower bound below the
@@ -706,11 +708,9 @@ fn topology(
                 // The same facet from another three of its vertices: all
                 // three on a face found (by their distances, not the
                 // normals': two facets may meet at a very flat edge).
-                let on = |f: &Face, v: &Vec3| f.offset - f.normal.dot(v) <= tolerance;
-                if faces
-                    .iter()
-                    .any(|f| f.normal.dot(&normal) > 0.0 && on(f, &a) && on(f, &b) && on(f, &c))
-                {
+                if faces.iter().any(|f| {
+                    f.normal.dot(&normal) > 0.0 && [a, b, c].iter().all(|v| f.holds(v, tolerance))
+                }) {
                     continue;
                 }
                 let offset = vertices
@@ -725,8 +725,7 @@ fn topology(
             let mut shared = [0u8; 2];
             let mut count = 0;
             for (f, face) in faces.iter().enumerate() {
-                let on = |v: &Vec3| face.offset - face.normal.dot(v) <= tolerance;
-                if on(a) && on(b) {
+                if face.holds(a, tolerance) && face.holds(b, tolerance) {
                     if let Some(slot) = shared.get_mut(count) {
                         *slot = f as u8;
                     }
@@ -754,13 +753,7 @@ fn topology(
     // hull is left to GJK).
     let corners = vertices
         .iter()
-        .filter(|v| {
-            faces
-                .iter()
-                .filter(|f| f.offset - f.normal.dot(v) <= tolerance)
-                .count()
-                >= 3
-        })
+        .filter(|v| faces.iter().filter(|f| f.holds(v, tolerance)).count() >= 3)
         .count();
     let sides_ok = (0..faces.len()).all(|f| {
         edges
@@ -773,11 +766,6 @@ fn topology(
         return None;
     }
     Some(())
-}
-
-/// Whether `q` is the vertex `v`.
-fn along_end(q: Vec3, v: Option<&Vec3>) -> bool {
-    v.is_some_and(|v| *v == q)
 }
 
 /// The edges of each face (or vertex), face by face: `of(edge)` names the
