@@ -1,46 +1,56 @@
 //! The escape's search at a dead end, in imagination (the arm holds still
 //! while it runs; the planner gives it a bounded slice per step,
-//! [`SEARCH_EVALUATIONS`] evaluations of the arm): a goal configuration, then a tree in joint space
-//! from the dead end to it, then the arm walks the tree's path.
+//! [`SEARCH_EVALUATIONS`] evaluations of the arm): a goal configuration,
+//! then RRT-Connect in joint space between the dead end and it, then the
+//! path found certified and shortened, then the arm walks it.
 //!
 //! 1. **Goal**: no inverse kinematics. The law descends from random
 //!    configurations ([`DESCENTS`] of them, at most [`DESCENT_STEPS`] law
 //!    steps each, every step cut by conservative advancement and accepted
 //!    as a real step would be) until one ends within [`GOAL_NEAR`] position
 //!    tolerances of the target: a collision-free configuration from which
-//!    the law finishes.
+//!    the law finishes. A draw the arm cannot stand in is drawn again (at
+//!    most [`DESCENT_DRAWS`] draws): most of a UR5's joint box is in its
+//!    table or in itself.
 //! 2. **Trunk**: a dead end is pressed on a surface, where few directions
-//!    are clear. The tree's first nodes leave it down the obstacle
-//!    potential (in the metric of the rate limits) for at most
-//!    [`TRUNK_STEPS`] advancement-bounded steps, until out of the band where
-//!    the projection engages.
-//! 3. **Tree**: RRT-Connect's greedy connection toward the goal
-//!    configuration (a [`GOAL_BIAS`] share of the extensions, each carrying
-//!    on while it is taken) and RRT's exploration toward random
-//!    configurations otherwise, from the nearest node in seconds at the rate
-//!    limits; edges at most [`EDGE_STEPS`] time steps at the rate limits,
-//!    checked at [`EDGE_CHECKS`] configurations along them (clear, and above
-//!    the contact floor or no closer than where they come from); an edge
-//!    blocked part of the way is kept as far as it was checked clear
-//!    (RRT's extend), and a greedy connection stops there. At most
-//!    [`EXTENSIONS`] extensions and [`TREE_NODES`] nodes; the search ends at
-//!    the first node within one edge of the goal configuration.
-//! 4. **Shortcut**: the path is shortened greedily, as sampling planners
-//!    do: from each node, the farthest later node a straight segment
-//!    reaches, checked at the edges' spacing, at most [`SHORTCUT_CHECKS`]
-//!    configurations in all.
+//!    are clear. The dead end's tree's first nodes leave it down the
+//!    obstacle potential (in the metric of the rate limits) for at most
+//!    [`TRUNK_STEPS`] advancement-bounded steps, until out of the band
+//!    where the projection engages.
+//! 3. **Trees**: RRT-Connect (Kuffner and LaValle, 2000): two trees, one
+//!    from the dead end and one from the goal configuration, take turns to
+//!    extend toward a random configuration (from the nearest node in seconds
+//!    at the rate limits); after each extension the other tree connects
+//!    greedily toward the node added, edge by edge while its edges are
+//!    clear; the trees are joined when a connection reaches it. Edges are at
+//!    most [`EDGE_STEPS`] time steps at the rate limits, checked at
+//!    [`EDGE_CHECKS`] configurations along them (clear, and above the
+//!    contact floor or no closer than where they come from); an edge blocked
+//!    part of the way is kept as far as it was checked clear (RRT's
+//!    extend), and a connection stops there. A node is kept only with
+//!    [`NODE_FLOOR`] of clearance. At most [`EXTENSIONS`] edges and
+//!    [`TREE_NODES`] nodes.
+//! 4. **Certify and shorten**: sampled checks can miss an obstacle between
+//!    them (a shelf's board, at a fast arm's speed); the path is certified
+//!    before the arm walks it, lazily, as lazy PRM (Bohlin and Kavraki,
+//!    2000) checks only the edges of the path it finds. From each node, the
+//!    farthest later node a straight segment reaches is tried first (the
+//!    shortcut of sampling planners; at most [`SHORTCUT_CHECKS`] sweep steps
+//!    on those), else the next node; a segment is certified when
+//!    conservative advancement sweeps it to its end (at most
+//!    [`SEGMENT_SWEEPS`] steps), each step's end accepted as a step's. A
+//!    tree edge that fails is pruned with the subtree it leads to, and the
+//!    trees grow again (at most [`CERTIFY_SWEEPS`] sweep steps a search).
 //!
-//! The tree is a plan: the walk along its path checks every one of its
-//! steps like any other step (conservative advancement, evaluation,
-//! acceptance), so a plan that an edge check missed ends the walk blocked,
-//! never in an obstacle. Memory: `TREE_NODES x (4 N + 5) + 8 N` bytes (18
-//! joints: 19 KiB).
+//! The arm walks a certified path: every segment is a motion conservative
+//! advancement allowed from where it starts, which the walk's own steps
+//! (checked like any other) take. Memory: `TREE_NODES x (4 N + 6) + 12 N +
+//! 64` bytes (18 joints: 19.5 KiB).
 
-use crate::control::joint_space::gap;
 use crate::control::law::{propose, DriveGoal, LawWorkspace};
 use crate::control::{time_at_limits, LawInput, LawKind};
 use crate::escape::rng::Rng;
-use crate::escape::tree::{Tree, TREE_NODES};
+use crate::escape::tree::{Root, Tree, TREE_NODES};
 use crate::evaluation::Evaluation;
 use crate::math::{all_finite, max, min};
 use crate::projection::CONTACT_FLOOR;
@@ -51,6 +61,10 @@ use crate::target::Target;
 
 /// Random configurations the law descends from, per search.
 pub const DESCENTS: u16 = 16;
+/// Random configurations drawn per search for the descents to start from:
+/// a draw the arm cannot stand in (an obstacle, its own links) is drawn
+/// again, at most this many times in all.
+pub const DESCENT_DRAWS: u16 = 8 * DESCENTS;
 /// Law steps per descent.
 pub const DESCENT_STEPS: u16 = 60;
 /// A descent that ends within this many position tolerances of the target
@@ -63,15 +77,23 @@ pub const EXTENSIONS: u16 = 2 * TREE_NODES as u16;
 /// How far beyond the span between the dead end and the goal configuration
 /// a revolute joint's random samples reach, radians.
 pub const SAMPLE_TURN: f32 = core::f32::consts::PI;
-/// Share of the extensions that reach for the goal configuration.
-pub const GOAL_BIAS: f32 = 0.3;
 /// Longest edge, in planner time steps at the rate limits.
 pub const EDGE_STEPS: f32 = 10.0;
+/// A node is kept only where the closest pair's clearance is at least this
+/// share of the engage clearance: the walk along the path must be able to
+/// leave it (conservative advancement creeps next to a surface).
+pub const NODE_FLOOR: f32 = 0.1;
+/// A segment swept to within this share of its time is swept whole.
+pub const EDGE_END: f32 = 1.0e-4;
 /// Configurations checked along an edge.
 pub const EDGE_CHECKS: usize = 5;
-/// Most configurations checked while shortening a path; the rest of the
-/// path is kept as found.
+/// Most sweep steps spent on shortcuts (segments that skip nodes); the
+/// rest of the path is certified edge by edge as found.
 pub const SHORTCUT_CHECKS: u16 = 256;
+/// Most conservative-advancement steps sweeping one segment of the path.
+pub const SEGMENT_SWEEPS: u16 = 64;
+/// Most sweep steps certifying the paths one search finds.
+pub const CERTIFY_SWEEPS: u16 = 1024;
 /// Evaluations of the arm (kinematics, pose error, potential) a planner
 /// step may spend on the search: the search's cost per step, about what a
 /// step with its halvings costs.
@@ -84,16 +106,25 @@ enum Stage {
     Goal,
     /// Leaving the dead end's surface.
     Trunk,
-    /// Growing the tree toward the goal configuration.
+    /// Growing the two trees toward each other.
     Grow,
-    /// Shortening the path found: straight segments across its nodes.
+    /// Certifying and shortening the path found: swept segments across its
+    /// nodes.
     Shortcut,
+}
+
+/// A greedy connection under way: one tree's edges from its node `from`
+/// toward the other tree's node `toward`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Connection {
+    from: u8,
+    toward: u8,
 }
 
 /// A search's fixed-size state.
 #[derive(Clone, Debug)]
 pub struct Search<const N: usize> {
-    /// The tree (root: the dead end).
+    /// The two trees (node 0: the dead end; the goal tree planted when they start to grow).
     tree: Tree<N>,
     /// The goal configuration, once found.
     goal: [f32; N],
@@ -107,14 +138,22 @@ pub struct Search<const N: usize> {
     probe_steps: u16,
     /// Descents started.
     descents: u16,
+    /// Configurations drawn for the descents to start from.
+    draws: u16,
     /// Trunk steps taken, and the trunk's last node.
     trunk_steps: u16,
     /// The trunk's last node.
     base: u8,
     /// Extensions tried.
     extensions: u16,
-    /// The node a greedy connection carries on from.
-    connecting: Option<u8>,
+    /// The goal configuration's `V`.
+    goal_v: f32,
+    /// Whether the goal tree is planted.
+    goal_planted: bool,
+    /// The tree the next random extension grows.
+    side: Root,
+    /// A greedy connection under way.
+    connecting: Option<Connection>,
     /// The path found (node indices, root first), shortened in place.
     path: [u8; TREE_NODES],
     /// Its length.
@@ -127,10 +166,22 @@ pub struct Search<const N: usize> {
     to: u8,
     /// See `from`.
     out: u8,
-    /// See `from`.
-    check: u16,
-    /// See `from`.
+    /// The segment's sweep: whether one is under way, the configuration it
+    /// reached, its time along the segment (seconds at the rate limits) and
+    /// its steps.
+    sweeping: bool,
+    /// See `sweeping`.
+    sweep_q: [f32; N],
+    /// See `sweeping`.
+    sweep_at: f32,
+    /// See `sweeping`.
+    sweep_steps: u16,
+    /// Sweep steps spent on segments that skip nodes.
     shortcut_checks: u16,
+    /// Sweep steps spent in all.
+    certify_steps: u16,
+    /// The dead end side's node where the trees met.
+    meeting: u8,
 }
 
 impl<const N: usize> Default for Search<N> {
@@ -143,17 +194,26 @@ impl<const N: usize> Default for Search<N> {
             probing: false,
             probe_steps: 0,
             descents: 0,
+            draws: 0,
             trunk_steps: 0,
             base: 0,
             extensions: 0,
+            goal_v: 0.0,
+            goal_planted: false,
+            side: Root::DeadEnd,
             connecting: None,
             path: [0; TREE_NODES],
             path_len: 0,
             from: 0,
             to: 0,
             out: 0,
-            check: 0,
+            sweeping: false,
+            sweep_q: [0.0; N],
+            sweep_at: 0.0,
+            sweep_steps: 0,
             shortcut_checks: 0,
+            certify_steps: 0,
+            meeting: 0,
         }
     }
 }
@@ -179,22 +239,40 @@ impl<const N: usize> Search<N> {
         self.probing = false;
         self.probe_steps = 0;
         self.descents = 0;
+        self.draws = 0;
         self.trunk_steps = 0;
         self.base = 0;
         self.extensions = 0;
+        self.goal_v = 0.0;
+        self.goal_planted = false;
+        self.side = Root::DeadEnd;
         self.connecting = None;
         self.path.fill(0);
         self.path_len = 0;
         self.from = 0;
         self.to = 0;
         self.out = 0;
-        self.check = 0;
+        self.sweeping = false;
+        self.sweep_q.fill(0.0);
+        self.sweep_at = 0.0;
+        self.sweep_steps = 0;
         self.shortcut_checks = 0;
+        self.certify_steps = 0;
+        self.meeting = 0;
     }
 
-    /// The path to node `end` is found: shorten it next.
-    fn found(&mut self, end: usize) {
-        self.path_len = self.tree.path(end, &mut self.path) as u8;
+    /// The trees are joined where `dead_end_side` and `goal_side` (nodes of
+    /// the two trees at one configuration) meet: the path runs from the dead
+    /// end to the first and from the second to the goal configuration.
+    /// Shorten it next.
+    fn found(&mut self, dead_end_side: usize, goal_side: usize) {
+        let to_meeting = self.tree.path(dead_end_side, &mut self.path);
+        // The meeting configuration once: the goal side's node replaces
+        // the dead end side's.
+        let len = self
+            .tree
+            .to_root(goal_side, &mut self.path, to_meeting.saturating_sub(1));
+        self.path_len = len as u8;
         self.stage = Stage::Shortcut;
         // The trunk's nodes on the path (node k at position k, up to its
         // last node) are kept as they are: each is a step the planner
@@ -207,7 +285,8 @@ impl<const N: usize> Search<N> {
         self.from = trunk as u8;
         self.out = trunk as u8 + 1;
         self.to = self.path_len.saturating_sub(1);
-        self.check = 1;
+        self.sweeping = false;
+        self.meeting = dead_end_side as u8;
     }
 
     /// The path, shortened: node indices, the dead end first.
@@ -341,13 +420,14 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
     let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
     let edge_s = EDGE_STEPS * settings.time_step_s;
     if !search.probing {
-        if search.descents >= DESCENTS {
+        if search.descents >= DESCENTS || search.draws >= DESCENT_DRAWS {
             return Slice::Failed;
         }
-        search.descents += 1;
+        search.draws += 1;
         draw_configuration(rng, robot, im.s.q);
         *spent += 1;
         if im.accept(f32::INFINITY) {
+            search.descents += 1;
             search.probe = *im.s.q;
             search.probing = true;
             search.probe_steps = 0;
@@ -358,6 +438,7 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
     let v = im.s.next.error.v;
     if v <= 0.5 * near * near {
         search.goal = search.probe;
+        search.goal_v = v;
         search.stage = Stage::Trunk;
         return Slice::Working;
     }
@@ -415,15 +496,18 @@ fn trunk_unit<const N: usize, const M: usize, const W: usize>(
         search.stage = Stage::Grow;
         return Slice::Working;
     }
-    match search.tree.push(&im.s.q[..n], base, v) {
+    match search.tree.grow(&im.s.q[..n], base, v) {
         Some(i) => search.base = i as u8,
         None => search.stage = Stage::Grow,
     }
     Slice::Working
 }
 
-/// One extension of the tree: toward the goal configuration (carrying on a
-/// greedy connection) or toward a random configuration.
+/// One unit of RRT-Connect: an extension of one tree toward a random
+/// configuration (the trees take turns), then, unit by unit, the other
+/// tree's greedy connection toward the node it added, carrying on while
+/// its edges are clear. The trees are joined when a connection's edge
+/// reaches that node.
 fn grow_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
     rng: &mut Rng,
@@ -436,132 +520,201 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
     if search.extensions >= EXTENSIONS || search.tree.is_full() {
         return Slice::Failed;
     }
+    if !search.goal_planted {
+        let (goal, v) = (search.goal, search.goal_v);
+        if search.tree.plant_goal(&goal[..n], v).is_none() {
+            return Slice::Failed;
+        }
+        search.goal_planted = true;
+    }
     search.extensions += 1;
-    let goal = search.goal;
-    let a = match search.connecting {
-        Some(a) => {
-            *im.s.q = goal;
-            a as usize
+    let (a, toward) = match search.connecting {
+        Some(c) => {
+            *im.s.q = *search.tree.node(c.toward as usize);
+            (c.from as usize, Some(c.toward as usize))
         }
         None => {
-            if rng.uniform() < 2.0 * GOAL_BIAS - 1.0 {
-                *im.s.q = goal;
-                search.connecting = Some(0);
-            } else {
-                draw_between(rng, robot, search.tree.node(0), &goal, im.s.q);
-            }
-            search.tree.nearest(robot, &im.s.q[..n])
+            let side = search.side;
+            search.side = side.other();
+            let goal = search.goal;
+            draw_between(rng, robot, search.tree.node(0), &goal, im.s.q);
+            (search.tree.nearest(robot, &im.s.q[..n], side), None)
         }
     };
     let qa = *search.tree.node(a);
     let sample = *im.s.q;
-    for j in 0..n {
-        im.s.rate[j] = (sample[j] - qa[j]) / edge_s;
-    }
-    let t = time_at_limits(robot, &im.s.rate[..n]);
-    if t > 1.0 {
-        im.s.rate[..n].iter_mut().for_each(|r| *r /= t);
-    }
-    // The edge, checked at configurations along it: a plan, not a motion
-    // (the walk along it checks each of its steps).
-    im.evaluate(&qa[..n]);
-    *spent += 1;
-    let mut c_from = im.s.next.closest();
-    let mut clear = all_finite(&im.s.rate[..n]);
-    // The last configuration checked clear along the edge, and its `V`.
-    let mut last_clear = 0usize;
-    let mut last_v = 0.0f32;
-    let along = |k: usize| edge_s * k as f32 / EDGE_CHECKS as f32;
-    for k in 1..=EDGE_CHECKS {
-        if !clear {
-            break;
-        }
-        along_edge(robot, &qa, im.s.rate, along(k), im.s.q);
-        *spent += 1;
-        clear = im.accept(c_from);
-        c_from = im.s.next.closest();
-        if clear {
-            (last_clear, last_v) = (k, im.s.next.error.v);
-        }
-    }
-    if !clear {
-        // RRT's extend: the edge as far as it was checked clear, if any
-        // of it was; a greedy connection stops there.
-        search.connecting = None;
-        if last_clear == 0 {
+    let swept = im.check_edge(&qa, &sample, edge_s, spent);
+    let (clear, last_v) = match swept {
+        Sweep::Refused => {
+            search.connecting = None;
             return Slice::Working;
         }
-        along_edge(robot, &qa, im.s.rate, along(last_clear), im.s.q);
-    }
-    let Some(i) = search.tree.push(&im.s.q[..n], a, last_v) else {
+        Sweep::Partial(v) => {
+            // RRT's extend: the edge as far as it was swept; a connection
+            // stops there.
+            search.connecting = None;
+            (false, v)
+        }
+        Sweep::Whole { v, at_sample } => (at_sample, v),
+    };
+    let Some(i) = search.tree.grow(&im.s.q[..n], a, last_v) else {
         return Slice::Failed;
     };
-    if clear && search.connecting.is_some() {
-        search.connecting = Some(i as u8);
-    }
-    if gap(robot, &im.s.q[..n], &goal[..n]) <= edge_s {
-        search.found(i);
+    match toward {
+        // Joined: node `i` is at `x`, in the other tree.
+        Some(x) if clear => {
+            let (dead_end_side, goal_side) = match search.tree.root_of(x) {
+                Root::DeadEnd => (x, i),
+                Root::Goal => (i, x),
+            };
+            search.found(dead_end_side, goal_side);
+        }
+        Some(x) if matches!(swept, Sweep::Whole { .. }) => {
+            search.connecting = Some(Connection {
+                from: i as u8,
+                toward: x as u8,
+            });
+        }
+        Some(_) => {}
+        // The other tree reaches for the new node.
+        None => {
+            let other = search.tree.root_of(i).other();
+            let from = search.tree.nearest(robot, &im.s.q[..n], other);
+            search.connecting = Some(Connection {
+                from: from as u8,
+                toward: i as u8,
+            });
+        }
     }
     Slice::Working
 }
 
-/// One configuration of the shortcut being checked: the segment from path
-/// position `from` to `to`, at the spacing of an edge's checks.
+/// One unit of the path's certification and shortening: conservative
+/// advancement along the segment from path position `from` to `to` (the
+/// farthest first), as many of its steps as the slice's evaluations allow.
+/// A segment swept to its end is certified: the walk along it can take it.
+/// A shortcut that fails is tried one node nearer; a tree edge that fails
+/// (the edge checks missed an obstacle between them) prunes the node it
+/// leads to and its subtree, and the trees grow again.
 fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
     im: &mut Imagination<'_, '_, N, M, W>,
     spent: &mut u16,
 ) -> Slice {
-    let scenario = im.scenario;
-    let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
-    let spacing = EDGE_STEPS * settings.time_step_s / EDGE_CHECKS as f32;
+    let n = im.n();
+    let robot = im.scenario.robot();
     let len = search.path_len as usize;
     let (from, to) = (search.from as usize, search.to as usize);
     if from + 1 >= len {
         search.path_len = search.out;
         return Slice::Found;
     }
-    let node = |search: &Search<N>, k: usize| {
-        *search
-            .tree
-            .node(search.path.get(k).copied().unwrap_or(0) as usize)
-    };
-    let (a, b) = (node(search, from), node(search, to));
-    let checks = libm::ceilf(gap(robot, &a[..n], &b[..n]) / spacing) as u16;
-    // A tree edge is already checked; a spent budget keeps the rest.
-    let keep = to == from + 1 || search.shortcut_checks >= SHORTCUT_CHECKS;
-    let mut accept = keep;
-    if !keep {
-        let k = search.check;
-        search.shortcut_checks += 1;
-        let t = k as f32 / checks.max(1) as f32;
-        for j in 0..n {
-            im.s.q[j] = a[j] + t * (b[j] - a[j]);
-        }
-        *spent += 1;
-        let clear = im.accept(f32::INFINITY);
-        if !clear {
-            search.to -= 1;
-            search.check = 1;
-            return Slice::Working;
-        }
-        if k < checks {
-            search.check = k + 1;
-            return Slice::Working;
-        }
-        accept = true;
+    if search.certify_steps >= CERTIFY_SWEEPS {
+        return Slice::Failed;
     }
-    if accept {
-        let (out, next) = (search.out as usize, if keep { from + 1 } else { to });
-        if let (Some(&v), true) = (search.path.get(next), out < TREE_NODES) {
-            search.path[out] = v;
+    let adjacent = to == from + 1;
+    if !adjacent && search.shortcut_checks >= SHORTCUT_CHECKS {
+        search.to = from as u8 + 1;
+        search.sweeping = false;
+        return Slice::Working;
+    }
+    let node = |search: &Search<N>, k: usize| search.path.get(k).copied().unwrap_or(0) as usize;
+    let (u, w) = (node(search, from), node(search, to));
+    let (a, b) = (*search.tree.node(u), *search.tree.node(w));
+    if !search.sweeping {
+        (search.sweep_q, search.sweep_at, search.sweep_steps) = (a, 0.0, 0);
+        search.sweeping = true;
+    }
+    // The segment at the rate limits: `duration` seconds at `rate`.
+    for j in 0..n {
+        im.s.rate[j] = b[j] - a[j];
+    }
+    let duration = time_at_limits(robot, &im.s.rate[..n]);
+    let certified = if duration > 0.0 && duration.is_finite() {
+        im.s.rate[..n].iter_mut().for_each(|r| *r /= duration);
+        let mut q = search.sweep_q;
+        im.evaluate(&q[..n]);
+        *spent += 1;
+        let mut c_from = im.s.next.closest();
+        let verdict = loop {
+            if search.sweep_steps >= SEGMENT_SWEEPS {
+                break Some(false);
+            }
+            search.sweep_steps += 1;
+            search.certify_steps += 1;
+            if !adjacent {
+                search.shortcut_checks += 1;
+            }
+            let h = im.advance(&q[..n], duration - search.sweep_at);
+            *spent += 1;
+            if h <= 0.0 || !im.accept(c_from) {
+                break Some(false);
+            }
+            q = *im.s.q;
+            search.sweep_at += h;
+            c_from = im.s.next.closest();
+            if search.sweep_at >= duration * (1.0 - EDGE_END) {
+                break Some(true);
+            }
+            if *spent >= SEARCH_EVALUATIONS {
+                break None;
+            }
+        };
+        search.sweep_q = q;
+        verdict
+    } else {
+        // One configuration twice: nothing to sweep.
+        Some(duration == 0.0)
+    };
+    match certified {
+        None => {}
+        Some(true) => {
+            if let Some(slot) = search.path.get_mut(search.out as usize) {
+                *slot = w as u8;
+            }
+            search.out += 1;
+            search.from = to as u8;
+            search.to = (len - 1) as u8;
+            search.sweeping = false;
         }
-        search.out += 1;
-        search.from = next as u8;
-        search.to = (len - 1) as u8;
-        search.check = 1;
+        Some(false) if adjacent => {
+            // The node this tree edge leads to (from its parent), or, where
+            // the trees met, the dead end side's meeting node.
+            let child = if search.tree.parent(w) == u {
+                w
+            } else if search.tree.parent(u) == w {
+                u
+            } else {
+                search.meeting as usize
+            };
+            search.tree.prune(child);
+            search.stage = Stage::Grow;
+            search.connecting = None;
+            search.sweeping = false;
+        }
+        Some(false) => {
+            search.to -= 1;
+            search.sweeping = false;
+        }
     }
     Slice::Working
+}
+
+/// How far an edge was swept.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Sweep {
+    /// Not far enough to keep (`s.q` undefined).
+    Refused,
+    /// Part of the way, to `s.q` (its `V`).
+    Partial(f32),
+    /// All of it, to `s.q` (its `V`); `at_sample`: the edge ends at the
+    /// configuration it was drawn toward.
+    Whole {
+        /// `V` at the end.
+        v: f32,
+        /// Whether the end is the configuration aimed at.
+        at_sample: bool,
+    },
 }
 
 /// One slice's world: the model, the target aimed at and the planner's
@@ -630,6 +783,62 @@ impl<const N: usize, const M: usize, const W: usize> Imagination<'_, '_, N, M, W
         h
     }
 
+    /// The edge from `qa` toward `sample`, at most `edge_s` at the rate
+    /// limits, checked at [`EDGE_CHECKS`] configurations along it (clear, not
+    /// creeping onto a surface): cheap, and a plan only (a thin obstacle may
+    /// lie between two checks); the path found is certified before it is
+    /// walked ([`shortcut_unit`]). Leaves in `s.q` the farthest configuration
+    /// checked before the first that is not clear, if it has at least
+    /// [`NODE_FLOOR`] of clearance (a node the walk can leave).
+    fn check_edge(
+        &mut self,
+        qa: &[f32; N],
+        sample: &[f32; N],
+        edge_s: f32,
+        spent: &mut u16,
+    ) -> Sweep {
+        let (settings, robot, n) = (self.scenario.settings(), self.scenario.robot(), self.n());
+        for j in 0..n {
+            self.s.rate[j] = (sample[j] - qa[j]) / edge_s;
+        }
+        let t = time_at_limits(robot, &self.s.rate[..n]);
+        let at_sample = t <= 1.0;
+        if !at_sample {
+            self.s.rate[..n].iter_mut().for_each(|r| *r /= t);
+        }
+        self.evaluate(&qa[..n]);
+        *spent += 1;
+        let node_floor = NODE_FLOOR * settings.avoidance.engage_clearance;
+        let mut c_from = self.s.next.closest();
+        let mut clear = all_finite(&self.s.rate[..n]);
+        // The farthest check a node may be put at, and its `V`.
+        let (mut kept, mut kept_v) = (0usize, 0.0f32);
+        let along = |k: usize| edge_s * k as f32 / EDGE_CHECKS as f32;
+        for k in 1..=EDGE_CHECKS {
+            if !clear {
+                break;
+            }
+            along_edge(robot, qa, self.s.rate, along(k), self.s.q);
+            *spent += 1;
+            clear = self.accept(c_from);
+            c_from = self.s.next.closest();
+            if clear && c_from >= node_floor {
+                (kept, kept_v) = (k, self.s.next.error.v);
+            }
+        }
+        if kept == EDGE_CHECKS {
+            return Sweep::Whole {
+                v: kept_v,
+                at_sample,
+            };
+        }
+        if kept == 0 {
+            return Sweep::Refused;
+        }
+        along_edge(robot, qa, self.s.rate, along(kept), self.s.q);
+        Sweep::Partial(kept_v)
+    }
+
     /// Evaluates `q` into `s.next`, against the target.
     fn evaluate(&mut self, q: &[f32]) {
         self.s.next.evaluate(self.scenario, q, self.target);
@@ -692,34 +901,63 @@ mod tests {
         }
     }
 
-    /// An edge toward the goal blocked partway by an obstacle is kept as
-    /// far as it was checked clear (RRT's extend): the tree grows by one
-    /// node, partway along the edge, clear, and the greedy connection stops.
-    #[test]
-    fn a_blocked_edge_is_kept_as_far_as_it_is_clear() {
-        const N: usize = 2;
-        // A planar 2-link arm (links of 1); a ball the elbow meets when
-        // joint 1 turns from 0 toward 1.2 rad.
+    const N: usize = 2;
+
+    /// A planar 2-link arm (links of 1) and a ball the elbow meets when
+    /// joint 1 turns from 0 toward 1.2 rad.
+    fn elbow_and_ball() -> Scenario<N, 1, 1> {
         let joint = Joint::revolute(0.0, 1.0, 0.0, -3.0, 3.0, 1.0);
         let robot = Robot::<N>::new(&[joint; N]).unwrap();
         let settings = Settings::for_robot(&robot);
         let mission = crate::Mission::new(&[Waypoint::at([0.0, 2.0, 0.0])], settings).unwrap();
         let ball = SuperEllipsoid::aligned([0.82, 0.57, 0.0], [0.1; 3], 2.0);
-        let sc = Scenario::<N, 1, 1>::new(robot, &[ball], &mission).unwrap();
+        Scenario::<N, 1, 1>::new(robot, &[ball], &mission).unwrap()
+    }
+
+    /// The planner's buffers a search imagines in.
+    struct Buffers {
+        next: Evaluation<N>,
+        q: [f32; N],
+        rate: [f32; N],
+        law: LawWorkspace<N>,
+    }
+
+    impl Buffers {
+        fn new() -> Self {
+            Buffers {
+                next: Evaluation::new(),
+                q: [0.0; N],
+                rate: [0.0; N],
+                law: LawWorkspace::default(),
+            }
+        }
+
+        fn scratch(&mut self) -> Scratch<'_, N> {
+            Scratch {
+                next: &mut self.next,
+                q: &mut self.q,
+                rate: &mut self.rate,
+                law: &mut self.law,
+            }
+        }
+    }
+
+    /// An edge toward the goal blocked partway by an obstacle is kept as
+    /// far as it was checked clear (RRT's extend): the tree grows by one
+    /// node, partway along the edge, clear, and the connection stops.
+    #[test]
+    fn a_blocked_edge_is_kept_as_far_as_it_is_clear() {
+        let sc = elbow_and_ball();
         let target = sc.targets()[0];
         let mut search = Search::<N>::default();
         search.begin(&[0.0, 0.0], 1.0);
         search.goal = [1.2, 0.0];
         search.stage = Stage::Grow;
-        search.connecting = Some(0);
-        let (mut next, mut q, mut rate) = (Evaluation::new(), [0.0f32; N], [0.0f32; N]);
-        let mut law = LawWorkspace::default();
-        let mut s = Scratch {
-            next: &mut next,
-            q: &mut q,
-            rate: &mut rate,
-            law: &mut law,
-        };
+        // The goal tree's root is node 1 (planted by the first unit): the
+        // dead end's root connects toward it.
+        search.connecting = Some(Connection { from: 0, toward: 1 });
+        let mut buffers = Buffers::new();
+        let mut s = buffers.scratch();
         let im = &mut Imagination {
             scenario: &sc,
             target: &target,
@@ -731,8 +969,11 @@ mod tests {
             grow_unit(&mut search, &mut rng, im, &mut spent),
             Slice::Working
         );
-        assert_eq!(search.tree.len(), 2, "one node added");
-        let node = *search.tree.node(1);
+        assert_eq!(search.tree.len(), 3, "the goal's root and one node added");
+        assert_eq!(search.tree.root_of(1), Root::Goal);
+        assert_eq!(search.tree.node(1), &[1.2, 0.0]);
+        let node = *search.tree.node(2);
+        assert_eq!(search.tree.root_of(2), Root::DeadEnd);
         // Partway: joint 1 moved toward the goal but not all the way to
         // the edge's end (0.5 s at 1 rad/s), joint 2 still.
         assert!(node[0] > 0.0 && node[0] < 0.5, "{node:?}");
@@ -745,11 +986,77 @@ mod tests {
         assert!(!im.s.next.clear());
     }
 
+    /// Runs the certification until it ends (or 1 000 units).
+    fn certify(search: &mut Search<N>, sc: &Scenario<N, 1, 1>) -> Slice {
+        let target = sc.targets()[0];
+        let mut buffers = Buffers::new();
+        let mut s = buffers.scratch();
+        let im = &mut Imagination {
+            scenario: sc,
+            target: &target,
+            s: &mut s,
+        };
+        for _ in 0..1000 {
+            let mut spent = 0;
+            let slice = shortcut_unit(search, im, &mut spent);
+            if slice != Slice::Working || search.stage != Stage::Shortcut {
+                return slice;
+            }
+        }
+        Slice::Working
+    }
+
+    /// The trees met across the ball (the edge checks missed it, as they
+    /// may a thin obstacle between two checks): the certification's sweep
+    /// does not, and the dead end side's meeting node is pruned and the
+    /// trees grow again. The same path round the other way is certified
+    /// and found as it is.
+    #[test]
+    fn a_path_through_an_obstacle_is_pruned_before_the_walk() {
+        let sc = elbow_and_ball();
+        for (goal, through) in [([1.2f32, 0.0], true), ([-0.5, 0.0], false)] {
+            let mut search = Search::<N>::default();
+            search.begin(&[0.0, 0.0], 1.0);
+            let meeting = search.tree.grow(&goal, 0, 0.5).unwrap();
+            let goal_root = search.tree.plant_goal(&goal, 0.0).unwrap();
+            search.found(meeting, goal_root);
+            assert_eq!(search.path(), &[0, goal_root as u8]);
+            let slice = certify(&mut search, &sc);
+            if through {
+                assert_eq!(slice, Slice::Working);
+                assert_eq!(search.stage, Stage::Grow);
+                assert!(search.tree.is_pruned(meeting));
+                assert!(!search.tree.is_pruned(goal_root));
+            } else {
+                assert_eq!(slice, Slice::Found);
+                assert_eq!(search.path(), &[0, goal_root as u8]);
+                assert!(!search.tree.is_pruned(meeting));
+            }
+        }
+    }
+
+    /// Joined trees give one path: the dead end's chain to the meeting
+    /// configuration, then the goal tree's chain from it to its root.
+    #[test]
+    fn joined_trees_give_one_path_from_the_dead_end_to_the_goal() {
+        let mut s = Search::<3>::default();
+        s.begin(&[0.0; 3], 2.0);
+        let goal = s.tree.plant_goal(&[3.0, 0.0, 0.0], 0.0).unwrap();
+        let a = s.tree.grow(&[1.0, 0.0, 0.0], 0, 1.0).unwrap();
+        let meeting = s.tree.grow(&[1.5, 0.0, 0.0], a, 1.0).unwrap();
+        let b = s.tree.grow(&[2.0, 0.0, 0.0], goal, 1.0).unwrap();
+        let across = s.tree.grow(&[1.5, 0.0, 0.0], b, 1.0).unwrap();
+        s.found(meeting, across);
+        assert_eq!(s.path(), &[0, a as u8, across as u8, b as u8, goal as u8]);
+        assert_eq!(s.path_node(4), Some(&[3.0, 0.0, 0.0]));
+        assert_eq!(s.stage, Stage::Shortcut);
+    }
+
     #[test]
     fn a_found_path_starts_at_the_dead_end_and_clears_in_place() {
         let mut s = Search::<3>::default();
         s.begin(&[1.0, 2.0, 3.0], 2.0);
-        s.found(0);
+        s.found(0, 0);
         assert_eq!(s.path(), &[0]);
         assert_eq!(s.path_node(0), Some(&[1.0, 2.0, 3.0]));
         assert_eq!(s.stage, Stage::Shortcut);
