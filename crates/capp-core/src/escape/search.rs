@@ -166,16 +166,13 @@ pub struct Search<const N: usize> {
     to: u8,
     /// See `from`.
     out: u8,
-    /// The segment's sweep: whether one is under way, the configuration it
-    /// reached, its time along the segment (seconds at the rate limits) and
-    /// its steps.
-    sweeping: bool,
-    /// See `sweeping`.
-    sweep_q: [f32; N],
-    /// See `sweeping`.
-    sweep_at: f32,
-    /// See `sweeping`.
+    /// The segment's sweep: its steps (0: not begun), the configuration it
+    /// reached and its time along the segment (seconds at the rate limits).
     sweep_steps: u16,
+    /// See `sweep_steps`.
+    sweep_q: [f32; N],
+    /// See `sweep_steps`.
+    sweep_at: f32,
     /// Sweep steps spent on segments that skip nodes.
     shortcut_checks: u16,
     /// Sweep steps spent in all.
@@ -207,7 +204,6 @@ impl<const N: usize> Default for Search<N> {
             from: 0,
             to: 0,
             out: 0,
-            sweeping: false,
             sweep_q: [0.0; N],
             sweep_at: 0.0,
             sweep_steps: 0,
@@ -252,7 +248,6 @@ impl<const N: usize> Search<N> {
         self.from = 0;
         self.to = 0;
         self.out = 0;
-        self.sweeping = false;
         self.sweep_q.fill(0.0);
         self.sweep_at = 0.0;
         self.sweep_steps = 0;
@@ -285,7 +280,7 @@ impl<const N: usize> Search<N> {
         self.from = trunk as u8;
         self.out = trunk as u8 + 1;
         self.to = self.path_len.saturating_sub(1);
-        self.sweeping = false;
+        self.sweep_steps = 0;
         self.meeting = dead_end_side as u8;
     }
 
@@ -543,49 +538,49 @@ fn grow_unit<const N: usize, const M: usize, const W: usize>(
     };
     let qa = *search.tree.node(a);
     let sample = *im.s.q;
-    let swept = im.check_edge(&qa, &sample, edge_s, spent);
-    let (clear, last_v) = match swept {
-        Sweep::Refused => {
+    let checked = im.check_edge(&qa, &sample, edge_s, spent);
+    let v = match checked {
+        EdgeCheck::Refused => {
             search.connecting = None;
             return Slice::Working;
         }
-        Sweep::Partial(v) => {
-            // RRT's extend: the edge as far as it was swept; a connection
-            // stops there.
-            search.connecting = None;
-            (false, v)
-        }
-        Sweep::Whole { v, at_sample } => (at_sample, v),
+        EdgeCheck::Partial(v) | EdgeCheck::Whole { v, .. } => v,
     };
-    let Some(i) = search.tree.grow(&im.s.q[..n], a, last_v) else {
+    let Some(i) = search.tree.grow(&im.s.q[..n], a, v) else {
         return Slice::Failed;
     };
-    match toward {
+    search.connecting = match (toward, checked) {
         // Joined: node `i` is at `x`, in the other tree.
-        Some(x) if clear => {
+        (
+            Some(x),
+            EdgeCheck::Whole {
+                at_sample: true, ..
+            },
+        ) => {
             let (dead_end_side, goal_side) = match search.tree.root_of(x) {
                 Root::DeadEnd => (x, i),
                 Root::Goal => (i, x),
             };
             search.found(dead_end_side, goal_side);
+            None
         }
-        Some(x) if matches!(swept, Sweep::Whole { .. }) => {
-            search.connecting = Some(Connection {
-                from: i as u8,
-                toward: x as u8,
-            });
-        }
-        Some(_) => {}
+        // A clear edge short of `x`: the connection carries on.
+        (Some(x), EdgeCheck::Whole { .. }) => Some(Connection {
+            from: i as u8,
+            toward: x as u8,
+        }),
+        // RRT's extend: the edge as far as it was clear; a connection
+        // stops there.
+        (Some(_), _) => None,
         // The other tree reaches for the new node.
-        None => {
+        (None, _) => {
             let other = search.tree.root_of(i).other();
-            let from = search.tree.nearest(robot, &im.s.q[..n], other);
-            search.connecting = Some(Connection {
-                from: from as u8,
+            Some(Connection {
+                from: search.tree.nearest(robot, &im.s.q[..n], other) as u8,
                 toward: i as u8,
-            });
+            })
         }
-    }
+    };
     Slice::Working
 }
 
@@ -615,15 +610,14 @@ fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
     let adjacent = to == from + 1;
     if !adjacent && search.shortcut_checks >= SHORTCUT_CHECKS {
         search.to = from as u8 + 1;
-        search.sweeping = false;
+        search.sweep_steps = 0;
         return Slice::Working;
     }
     let node = |search: &Search<N>, k: usize| search.path.get(k).copied().unwrap_or(0) as usize;
     let (u, w) = (node(search, from), node(search, to));
     let (a, b) = (*search.tree.node(u), *search.tree.node(w));
-    if !search.sweeping {
-        (search.sweep_q, search.sweep_at, search.sweep_steps) = (a, 0.0, 0);
-        search.sweeping = true;
+    if search.sweep_steps == 0 {
+        (search.sweep_q, search.sweep_at) = (a, 0.0);
     }
     // The segment at the rate limits: `duration` seconds at `rate`.
     for j in 0..n {
@@ -675,7 +669,7 @@ fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
             search.out += 1;
             search.from = to as u8;
             search.to = (len - 1) as u8;
-            search.sweeping = false;
+            search.sweep_steps = 0;
         }
         Some(false) if adjacent => {
             // The node this tree edge leads to (from its parent), or, where
@@ -690,19 +684,19 @@ fn shortcut_unit<const N: usize, const M: usize, const W: usize>(
             search.tree.prune(child);
             search.stage = Stage::Grow;
             search.connecting = None;
-            search.sweeping = false;
+            search.sweep_steps = 0;
         }
         Some(false) => {
             search.to -= 1;
-            search.sweeping = false;
+            search.sweep_steps = 0;
         }
     }
     Slice::Working
 }
 
-/// How far an edge was swept.
+/// How far an edge was checked clear ([`Imagination::check_edge`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Sweep {
+enum EdgeCheck {
     /// Not far enough to keep (`s.q` undefined).
     Refused,
     /// Part of the way, to `s.q` (its `V`).
@@ -796,7 +790,7 @@ impl<const N: usize, const M: usize, const W: usize> Imagination<'_, '_, N, M, W
         sample: &[f32; N],
         edge_s: f32,
         spent: &mut u16,
-    ) -> Sweep {
+    ) -> EdgeCheck {
         let (settings, robot, n) = (self.scenario.settings(), self.scenario.robot(), self.n());
         for j in 0..n {
             self.s.rate[j] = (sample[j] - qa[j]) / edge_s;
@@ -827,16 +821,16 @@ impl<const N: usize, const M: usize, const W: usize> Imagination<'_, '_, N, M, W
             }
         }
         if kept == EDGE_CHECKS {
-            return Sweep::Whole {
+            return EdgeCheck::Whole {
                 v: kept_v,
                 at_sample,
             };
         }
         if kept == 0 {
-            return Sweep::Refused;
+            return EdgeCheck::Refused;
         }
         along_edge(robot, qa, self.s.rate, along(kept), self.s.q);
-        Sweep::Partial(kept_v)
+        EdgeCheck::Partial(kept_v)
     }
 
     /// Evaluates `q` into `s.next`, against the target.

@@ -86,7 +86,7 @@ impl<const N: usize> Tree<N> {
     /// when full.
     pub fn plant_goal(&mut self, q: &[f32], v: f32) -> Option<usize> {
         let i = self.push(q, self.len(), v)?;
-        self.mark_goal_side(i);
+        set_bit(&mut self.goal_side, i);
         Some(i)
     }
 
@@ -95,13 +95,9 @@ impl<const N: usize> Tree<N> {
     pub fn grow(&mut self, q: &[f32], parent: usize, v: f32) -> Option<usize> {
         let i = self.push(q, parent, v)?;
         if self.root_of(parent) == Root::Goal {
-            self.mark_goal_side(i);
+            set_bit(&mut self.goal_side, i);
         }
         Some(i)
-    }
-
-    fn mark_goal_side(&mut self, i: usize) {
-        set_bit(&mut self.goal_side, i);
     }
 
     /// Node `i`'s parent (itself for a root).
@@ -225,7 +221,7 @@ impl<const N: usize> Tree<N> {
                 *slot = i as u8;
                 len += 1;
             }
-            let parent = self.parent.get(i).copied().unwrap_or(0) as usize;
+            let parent = self.parent(i);
             if parent == i {
                 break;
             }
