@@ -388,6 +388,34 @@ fn draw_between<const N: usize>(
     }
 }
 
+/// `goal`'s revolute joints turned by whole turns to the angle nearest
+/// `from`'s that their limits allow: the same arm in the same pose (a
+/// revolute joint's transform repeats every turn), nearer in joint space.
+/// A descent from a random configuration of a UR5 (every joint +-2 pi) ends
+/// at any of up to 2^6 such copies of its pose, most of them turns away from
+/// the dead end, with the table in between.
+fn nearest_turns<const N: usize>(robot: &Robot<N>, from: &[f32; N], goal: &mut [f32; N]) {
+    const TURN: f32 = 2.0 * core::f32::consts::PI;
+    for (j, joint) in robot.joints().iter().enumerate().take(robot.len().min(N)) {
+        if joint.kind != JointKind::Revolute {
+            continue;
+        }
+        let mut turns = libm::roundf((goal[j] - from[j]) / TURN);
+        let g = goal[j] - turns * TURN;
+        if g > joint.max {
+            turns += 1.0;
+        } else if g < joint.min {
+            turns -= 1.0;
+        }
+        let g = goal[j] - turns * TURN;
+        // Not taken when no turn (the angle stays as it is, to the bit),
+        // not finite, or outside the limits.
+        if turns != 0.0 && g >= joint.min && g <= joint.max {
+            goal[j] = g;
+        }
+    }
+}
+
 /// The configuration `along` seconds (at `rate`) from `qa`, within the
 /// joint limits, into `q`.
 fn along_edge<const N: usize>(
@@ -435,6 +463,18 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
         search.goal = search.probe;
         search.goal_v = v;
         search.stage = Stage::Trunk;
+        // The same arm, its joints whole turns nearer the dead end's
+        // (checked again: the turned angles are rounded).
+        let dead_end = *search.tree.node(0);
+        *im.s.q = search.probe;
+        nearest_turns(robot, &dead_end, im.s.q);
+        if *im.s.q != search.probe {
+            *spent += 1;
+            if im.accept(f32::INFINITY) {
+                search.goal = *im.s.q;
+                search.goal_v = im.s.next.error.v;
+            }
+        }
         return Slice::Working;
     }
     if search.probe_steps >= DESCENT_STEPS {
@@ -893,6 +933,54 @@ mod tests {
             );
             assert!(lo[j] < l + 0.01 * (h - l) && hi[j] > h - 0.01 * (h - l));
         }
+    }
+
+    /// A goal turned by whole turns is the same arm nearer the dead end:
+    /// every joint within its limits, no alternative turn within them
+    /// nearer the dead end's angle, the same end-effector pose (forward
+    /// kinematics) to f32 rounding, and a joint no turn fits in (range
+    /// under a turn, or prismatic) keeps its value to the bit.
+    #[test]
+    fn a_goal_turned_by_whole_turns_is_the_same_arm_nearer_the_dead_end() {
+        use crate::kinematics::{forward_kinematics, Frames};
+        use core::f32::consts::PI;
+        let wide = Joint::revolute(0.4, 0.7, 0.2, -6.2, 6.2, 1.0);
+        let narrow = Joint::revolute(-0.3, 0.5, 0.0, -2.5, 2.5, 1.0);
+        let slide = Joint::prismatic(0.2, 0.1, 0.0, 0.5, 2.0, 1.0);
+        let robot = Robot::<4>::new(&[wide, narrow, wide, slide]).unwrap();
+        let mut rng = Rng::seeded(11, &[]);
+        let (mut before, mut after) = (Frames::default(), Frames::default());
+        let mut turned = 0;
+        for _ in 0..500 {
+            let (mut from, mut goal) = ([0.0f32; 4], [0.0f32; 4]);
+            draw_configuration(&mut rng, &robot, &mut from);
+            draw_configuration(&mut rng, &robot, &mut goal);
+            let mut q = goal;
+            nearest_turns(&robot, &from, &mut q);
+            for (j, joint) in robot.joints().iter().enumerate() {
+                assert!(
+                    q[j] >= joint.min && q[j] <= joint.max,
+                    "joint {j}: {}",
+                    q[j]
+                );
+                if joint.kind == JointKind::Prismatic || joint.max - joint.min < 2.0 * PI {
+                    assert_eq!(q[j].to_bits(), goal[j].to_bits(), "joint {j}");
+                    continue;
+                }
+                turned += usize::from(q[j] != goal[j]);
+                let away = (q[j] - from[j]).abs();
+                for other in [q[j] - 2.0 * PI, q[j] + 2.0 * PI] {
+                    if other >= joint.min && other <= joint.max {
+                        assert!((other - from[j]).abs() >= away - 1e-4, "joint {j}");
+                    }
+                }
+            }
+            forward_kinematics(&robot, &goal, &mut before);
+            forward_kinematics(&robot, &q, &mut after);
+            assert!((before.end_position() - after.end_position()).norm() < 1e-4);
+            assert!((before.end_rotation() - after.end_rotation()).norm() < 1e-4);
+        }
+        assert!(turned > 100, "{turned} joints turned");
     }
 
     const N: usize = 2;
