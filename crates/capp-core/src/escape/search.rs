@@ -11,7 +11,9 @@
 //!    tolerances of the target: a collision-free configuration from which
 //!    the law finishes. A draw the arm cannot stand in is drawn again (at
 //!    most [`DESCENT_DRAWS`] draws): most of a UR5's joint box is in its
-//!    table or in itself.
+//!    table or in itself. The goal's revolute joints are then turned by
+//!    whole turns to the angles nearest the dead end's (`nearest_turns`):
+//!    the same arm in the same pose, not a turn of the shoulder away.
 //! 2. **Trunk**: a dead end is pressed on a surface, where few directions
 //!    are clear. The dead end's tree's first nodes leave it down the
 //!    obstacle potential (in the metric of the rate limits) for at most
