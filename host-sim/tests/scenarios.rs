@@ -208,6 +208,40 @@ fn planar_search_reaches_by_a_searched_path() {
     );
 }
 
+/// The same dead end with the waypoint given as a joint configuration (the
+/// configuration `planar_search.toml`'s pose came from): the search takes
+/// it as its goal configuration as it is, finds a path, and the arm ends
+/// at that configuration (within the joint goal's tolerance, a twentieth of
+/// a step at the rate limits); the checker accepts the run. (Descending
+/// toward its pose instead, as the search did before, all four searches
+/// found no path and the run stalled after 64 attempts.)
+#[test]
+fn a_joint_goal_behind_a_post_is_the_search_goal() {
+    use capp_core::escape::EscapeState;
+    let mut problem = Problem::load(&scenario("planar_search.toml")).unwrap();
+    let goal = vec![2.6397583f32, 0.60187143, 1.4365302];
+    problem.joint_goals = vec![(0, goal.clone())];
+    let s = problem.validate().unwrap();
+    let result = plan::run(&problem, &s, |_| {}).unwrap();
+    assert_eq!(result.outcome, Outcome::Reached);
+    let following = |e: &Option<EscapeState>| matches!(e, Some(EscapeState::Following { .. }));
+    assert!(
+        result.rows.iter().any(|r| following(&r.escape)),
+        "a searched path"
+    );
+    let last = result.rows.last().unwrap();
+    let dt = problem.settings.time_step_s;
+    for (j, (q, g)) in last.q.iter().zip(&goal).enumerate() {
+        let rate = problem.joints[j].max_rate;
+        assert!(
+            (q - g).abs() <= 0.05 * dt * rate + 1e-6,
+            "joint {j}: {q} for {g}"
+        );
+    }
+    let report = check::check(&problem, &as_trajectory(&problem, &result));
+    assert!(report.accepted() && report.reaches_target, "{report}");
+}
+
 #[test]
 fn planar_arm_reaches() {
     runs_and_checks("planar_arm.toml", Outcome::Reached);

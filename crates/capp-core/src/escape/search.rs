@@ -13,7 +13,8 @@
 //!    most [`DESCENT_DRAWS`] draws): most of a UR5's joint box is in its
 //!    table or in itself. The goal's revolute joints are then turned by
 //!    whole turns to the angles nearest the dead end's (`nearest_turns`):
-//!    the same arm in the same pose, not a turn of the shoulder away.
+//!    the same arm in the same pose, not a turn of the shoulder away. A
+//!    waypoint given as a joint configuration is its own goal configuration.
 //! 2. **Trunk**: a dead end is pressed on a surface, where few directions
 //!    are clear. The dead end's tree's first nodes leave it down the
 //!    obstacle potential (in the metric of the rate limits) for at most
@@ -445,6 +446,20 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
     let (settings, robot, n) = (scenario.settings(), scenario.robot(), im.n());
     let edge_s = EDGE_STEPS * settings.time_step_s;
     if !search.probing {
+        // A joint goal is the goal configuration itself (as it is: its
+        // joints are not turned), where the arm must stand: no descents.
+        if let Some(joints) = im.target.joints.and_then(|k| scenario.joint_goal(k)) {
+            let m = n.min(joints.len());
+            im.s.q[..m].copy_from_slice(&joints[..m]);
+            *spent += 1;
+            if !im.accept(f32::INFINITY) {
+                return Slice::Failed;
+            }
+            search.goal = *im.s.q;
+            search.goal_v = im.s.next.error.v;
+            search.stage = Stage::Trunk;
+            return Slice::Working;
+        }
         if search.descents >= DESCENTS || search.draws >= DESCENT_DRAWS {
             return Slice::Failed;
         }
@@ -1068,6 +1083,39 @@ mod tests {
         // The whole edge was not clear: its end is in the ball.
         im.evaluate(&[0.5, 0.0]);
         assert!(!im.s.next.clear());
+    }
+
+    /// A waypoint given as a joint configuration is the search's goal
+    /// configuration as it is, in one evaluation and no draw; one the arm
+    /// cannot stand in (the elbow in the ball) fails the search at once.
+    #[test]
+    fn a_joint_goal_is_the_goal_configuration_as_it_is() {
+        for (goal, clear) in [([-2.0f32, 0.5], true), ([0.62, 0.0], false)] {
+            let mut sc = elbow_and_ball();
+            sc.set_joint_goal(0, &goal).unwrap();
+            let target = sc.targets()[0];
+            let mut search = Search::<N>::default();
+            search.begin(&[0.0, 0.0], 1.0);
+            let mut buffers = Buffers::new();
+            let mut s = buffers.scratch();
+            let im = &mut Imagination {
+                scenario: &sc,
+                target: &target,
+                s: &mut s,
+            };
+            let mut rng = Rng::seeded(5, &[]);
+            let mut spent = 0;
+            let slice = goal_unit(&mut search, &mut rng, im, &mut spent);
+            assert_eq!(spent, 1);
+            assert_eq!(search.draws, 0);
+            if clear {
+                assert_eq!(slice, Slice::Working);
+                assert_eq!(search.stage, Stage::Trunk);
+                assert_eq!(search.goal, goal);
+            } else {
+                assert_eq!(slice, Slice::Failed);
+            }
+        }
     }
 
     /// Runs the certification until it ends (or 1 000 units).
