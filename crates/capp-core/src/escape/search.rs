@@ -1041,13 +1041,28 @@ mod tests {
         }
     }
 
+    /// Runs `f` in an imagination of `sc` aiming at its first target, in
+    /// fresh buffers.
+    fn imagine<R>(
+        sc: &Scenario<N, 1, 1>,
+        f: impl FnOnce(&mut Imagination<'_, '_, N, 1, 1>) -> R,
+    ) -> R {
+        let target = sc.targets()[0];
+        let mut buffers = Buffers::new();
+        let mut s = buffers.scratch();
+        f(&mut Imagination {
+            scenario: sc,
+            target: &target,
+            s: &mut s,
+        })
+    }
+
     /// An edge toward the goal blocked partway by an obstacle is kept as
     /// far as it was checked clear (RRT's extend): the tree grows by one
     /// node, partway along the edge, clear, and the connection stops.
     #[test]
     fn a_blocked_edge_is_kept_as_far_as_it_is_clear() {
         let sc = elbow_and_ball();
-        let target = sc.targets()[0];
         let mut search = Search::<N>::default();
         search.begin(&[0.0, 0.0], 1.0);
         search.goal = [1.2, 0.0];
@@ -1055,34 +1070,29 @@ mod tests {
         // The goal tree's root is node 1 (planted by the first unit): the
         // dead end's root connects toward it.
         search.connecting = Some(Connection { from: 0, toward: 1 });
-        let mut buffers = Buffers::new();
-        let mut s = buffers.scratch();
-        let im = &mut Imagination {
-            scenario: &sc,
-            target: &target,
-            s: &mut s,
-        };
-        let mut rng = Rng::seeded(1, &[]);
-        let mut spent = 0;
-        assert_eq!(
-            grow_unit(&mut search, &mut rng, im, &mut spent),
-            Slice::Working
-        );
-        assert_eq!(search.tree.len(), 3, "the goal's root and one node added");
-        assert_eq!(search.tree.root_of(1), Root::Goal);
-        assert_eq!(search.tree.node(1), &[1.2, 0.0]);
-        let node = *search.tree.node(2);
-        assert_eq!(search.tree.root_of(2), Root::DeadEnd);
-        // Partway: joint 1 moved toward the goal but not all the way to
-        // the edge's end (0.5 s at 1 rad/s), joint 2 still.
-        assert!(node[0] > 0.0 && node[0] < 0.5, "{node:?}");
-        assert_eq!(node[1], 0.0);
-        im.evaluate(&node);
-        assert!(im.s.next.clear(), "the kept node is clear");
-        assert_eq!(search.connecting, None);
-        // The whole edge was not clear: its end is in the ball.
-        im.evaluate(&[0.5, 0.0]);
-        assert!(!im.s.next.clear());
+        imagine(&sc, |im| {
+            let mut rng = Rng::seeded(1, &[]);
+            let mut spent = 0;
+            assert_eq!(
+                grow_unit(&mut search, &mut rng, im, &mut spent),
+                Slice::Working
+            );
+            assert_eq!(search.tree.len(), 3, "the goal's root and one node added");
+            assert_eq!(search.tree.root_of(1), Root::Goal);
+            assert_eq!(search.tree.node(1), &[1.2, 0.0]);
+            let node = *search.tree.node(2);
+            assert_eq!(search.tree.root_of(2), Root::DeadEnd);
+            // Partway: joint 1 moved toward the goal but not all the way to
+            // the edge's end (0.5 s at 1 rad/s), joint 2 still.
+            assert!(node[0] > 0.0 && node[0] < 0.5, "{node:?}");
+            assert_eq!(node[1], 0.0);
+            im.evaluate(&node);
+            assert!(im.s.next.clear(), "the kept node is clear");
+            assert_eq!(search.connecting, None);
+            // The whole edge was not clear: its end is in the ball.
+            im.evaluate(&[0.5, 0.0]);
+            assert!(!im.s.next.clear());
+        });
     }
 
     /// A waypoint given as a joint configuration is the search's goal
@@ -1093,19 +1103,11 @@ mod tests {
         for (goal, clear) in [([-2.0f32, 0.5], true), ([0.62, 0.0], false)] {
             let mut sc = elbow_and_ball();
             sc.set_joint_goal(0, &goal).unwrap();
-            let target = sc.targets()[0];
             let mut search = Search::<N>::default();
             search.begin(&[0.0, 0.0], 1.0);
-            let mut buffers = Buffers::new();
-            let mut s = buffers.scratch();
-            let im = &mut Imagination {
-                scenario: &sc,
-                target: &target,
-                s: &mut s,
-            };
             let mut rng = Rng::seeded(5, &[]);
             let mut spent = 0;
-            let slice = goal_unit(&mut search, &mut rng, im, &mut spent);
+            let slice = imagine(&sc, |im| goal_unit(&mut search, &mut rng, im, &mut spent));
             assert_eq!(spent, 1);
             assert_eq!(search.draws, 0);
             if clear {
@@ -1120,22 +1122,16 @@ mod tests {
 
     /// Runs the certification until it ends (or 1 000 units).
     fn certify(search: &mut Search<N>, sc: &Scenario<N, 1, 1>) -> Slice {
-        let target = sc.targets()[0];
-        let mut buffers = Buffers::new();
-        let mut s = buffers.scratch();
-        let im = &mut Imagination {
-            scenario: sc,
-            target: &target,
-            s: &mut s,
-        };
-        for _ in 0..1000 {
-            let mut spent = 0;
-            let slice = shortcut_unit(search, im, &mut spent);
-            if slice != Slice::Working || search.stage != Stage::Shortcut {
-                return slice;
+        imagine(sc, |im| {
+            for _ in 0..1000 {
+                let mut spent = 0;
+                let slice = shortcut_unit(search, im, &mut spent);
+                if slice != Slice::Working || search.stage != Stage::Shortcut {
+                    return slice;
+                }
             }
-        }
-        Slice::Working
+            Slice::Working
+        })
     }
 
     /// The trees met across the ball (the edge checks missed it, as they
