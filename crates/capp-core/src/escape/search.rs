@@ -287,6 +287,12 @@ impl<const N: usize> Search<N> {
         self.meeting = dead_end_side as u8;
     }
 
+    /// The goal configuration is `goal` (its `V`, `v`): the trunk next.
+    fn goal_found(&mut self, goal: [f32; N], v: f32) {
+        (self.goal, self.goal_v) = (goal, v);
+        self.stage = Stage::Trunk;
+    }
+
     /// The path, shortened: node indices, the dead end first.
     fn path(&self) -> &[u8] {
         &self.path[..(self.path_len as usize).min(TREE_NODES)]
@@ -434,8 +440,10 @@ fn along_edge<const N: usize>(
 }
 
 /// A descent's next unit: start one from a random configuration, or take
-/// its next law step. Keeps `s.next` the evaluation of the probe while a
-/// descent is under way.
+/// its next law step, or, ended near the target, give the goal (at the
+/// turns nearest the dead end). A joint goal is taken as it is, with no
+/// descent. Keeps `s.next` the evaluation of the probe while a descent is
+/// under way.
 fn goal_unit<const N: usize, const M: usize, const W: usize>(
     search: &mut Search<N>,
     rng: &mut Rng,
@@ -455,9 +463,7 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
             if !im.accept(f32::INFINITY) {
                 return Slice::Failed;
             }
-            search.goal = *im.s.q;
-            search.goal_v = im.s.next.error.v;
-            search.stage = Stage::Trunk;
+            search.goal_found(*im.s.q, im.s.next.error.v);
             return Slice::Working;
         }
         if search.descents >= DESCENTS || search.draws >= DESCENT_DRAWS {
@@ -477,21 +483,19 @@ fn goal_unit<const N: usize, const M: usize, const W: usize>(
     let near = GOAL_NEAR * settings.position_tolerance;
     let v = im.s.next.error.v;
     if v <= 0.5 * near * near {
-        search.goal = search.probe;
-        search.goal_v = v;
-        search.stage = Stage::Trunk;
         // The same arm, its joints whole turns nearer the dead end's
         // (checked again: the turned angles are rounded).
+        let (mut goal, mut goal_v) = (search.probe, v);
         let dead_end = *search.tree.node(0);
         *im.s.q = search.probe;
         nearest_turns(robot, &dead_end, im.s.q);
         if *im.s.q != search.probe {
             *spent += 1;
             if im.accept(f32::INFINITY) {
-                search.goal = *im.s.q;
-                search.goal_v = im.s.next.error.v;
+                (goal, goal_v) = (*im.s.q, im.s.next.error.v);
             }
         }
+        search.goal_found(goal, goal_v);
         return Slice::Working;
     }
     if search.probe_steps >= DESCENT_STEPS {
