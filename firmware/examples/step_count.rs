@@ -325,11 +325,26 @@ fn pair_costs<const N: usize>(name: &str, scene: &Scene<N>, planner: &Planner<N>
     }
 }
 
+/// `Obstacle::contact` for every point of `points` against `obstacle`, each
+/// result kept (`black_box`).
+#[inline(never)]
+fn contacts(
+    obstacle: &capp_core::obstacle::Obstacle,
+    points: &[capp_core::math::Vec3],
+    hulls: &[capp_core::obstacle::Hull],
+) {
+    for point in points {
+        black_box(obstacle.contact(point, capp_core::obstacle::PointKind::Link, hulls));
+    }
+}
+
 /// Instructions of one point / obstacle evaluation (`Obstacle::contact`)
 /// for each shape, of PIPS size (inches, the listing's margins and 24 in of
-/// influence), aligned and turned: the mean over 96 points around the shape
-/// within its influence (each timed over 16 repetitions). One line per
-/// shape, `obstacles` = 1, `what` = `contact_<shape>_<aligned|turned>`.
+/// influence), aligned and turned: the mean over the points of a spiral of
+/// 96 around the shape that are within its influence, each timed alone over
+/// 16 repetitions (`what` = `contact_<shape>_<aligned|turned>`) and all of
+/// them in a loop ([`contacts`], 16 repetitions; `loop_<shape>_<...>`). Two
+/// lines per shape and orientation, `obstacles` = 1.
 fn shape_costs() {
     use capp_core::obstacle::{Hull, Obstacle, PointKind};
     use capp_core::{Shape, Solid};
@@ -411,9 +426,10 @@ fn shape_costs() {
             let Ok(obstacle) = Obstacle::new_in(0, &solid, &hulls, [6.0, 3.0], 24.0) else {
                 continue;
             };
-            let (mut total, mut within) = (0u64, 0u64);
             // A spiral of directions, at 1.2 x the shape's size from its
             // centre: points outside the inflated shape, within influence.
+            let mut points = [capp_core::math::Vec3::zeros(); 96];
+            let mut within = 0usize;
             for i in 0..96u32 {
                 let z = 1.0 - (2.0 * i as f32 + 1.0) / 96.0;
                 let ring = capp_core::math::sqrt(1.0 - z * z);
@@ -424,30 +440,47 @@ fn shape_costs() {
                     -40.0 + r * ring * s,
                     30.0 + r * z,
                 );
-                if obstacle.contact(&point, PointKind::Link, &hulls).is_none() {
-                    continue;
+                if obstacle.contact(&point, PointKind::Link, &hulls).is_some() {
+                    points[within] = point;
+                    within += 1;
                 }
+            }
+            // Each point alone (the obstacle a constant of this function:
+            // its sizes may be folded into the code) ...
+            let mut alone = 0u64;
+            for point in &points[..within] {
                 let mut hit = false;
-                total += repeat(
+                alone += repeat(
                     16,
                     &mut hit,
                     |_| {},
                     |h| {
-                        *h =
-                            black_box(obstacle.contact(black_box(&point), PointKind::Link, &hulls))
-                                .is_some();
+                        *h = black_box(obstacle.contact(black_box(point), PointKind::Link, &hulls))
+                            .is_some();
                     },
                 );
-                within += 1;
             }
-            if let Some(mean) = total.checked_div(within) {
-                hprintln!(
-                    "M4F shape 0 1 contact_{}_{} {}.{}",
-                    label,
-                    turn,
-                    mean / 10,
-                    mean % 10
-                );
+            // ... and the pairs in a loop of their own, as the planner's
+            // pair loop runs them: the obstacle as data, `contact` inlined,
+            // the loop's own few instructions a pair included.
+            let in_loop = repeat(
+                16,
+                &mut (),
+                |_| {},
+                |_| contacts(black_box(&obstacle), black_box(&points[..within]), &hulls),
+            );
+            let within = within as u64;
+            for (what, total) in [("contact", alone), ("loop", in_loop)] {
+                if let Some(mean) = total.checked_div(within) {
+                    hprintln!(
+                        "M4F shape 0 1 {}_{}_{} {}.{}",
+                        what,
+                        label,
+                        turn,
+                        mean / 10,
+                        mean % 10
+                    );
+                }
             }
         }
     }

@@ -130,10 +130,26 @@ pub fn from_segment(x: &Vec3, half_length: f32) -> Vec3 {
 #[inline(always)]
 pub fn from_box(x: &Vec3, half: &Vec3) -> Vec3 {
     Vec3::new(
-        x.x - clamp(x.x, half.x),
-        x.y - clamp(x.y, half.y),
-        x.z - clamp(x.z, half.z),
+        beyond(x.x, half.x),
+        beyond(x.y, half.y),
+        beyond(x.z, half.z),
     )
+}
+
+/// `v - clamp(v, -h, h)` for `h > 0`, to the bit (`+0` within the slab, NaN
+/// for a NaN `v`), as `|v| - h` where that is positive, signed as `v`.
+///
+/// Integer operations on the bits, no comparison: on the Cortex-M4F a
+/// float comparison is a `vcmp`, a `vmrs` and a conditional move, and a
+/// clamp two of them; here `|v| - h` is a positive float exactly when its
+/// bits less one are a non-negative integer (`+0` gives -1; `-0` cannot
+/// occur, as `|v| >= +0` and `h > 0`). The sign is taken from `v`, and
+/// rounding is symmetric, so `-(|v| - h)` is `v + h` as the clamp rounds it.
+#[inline(always)]
+fn beyond(v: f32, h: f32) -> f32 {
+    let excess = (v.abs() - h).to_bits();
+    let not_positive = ((excess as i32).wrapping_sub(1) >> 31) as u32;
+    f32::from_bits((excess | (v.to_bits() & 0x8000_0000)) & !not_positive)
 }
 
 /// `v` clamped to `[-h, h]` (`max` and `min`, not `f32::clamp`: that has a
@@ -302,6 +318,42 @@ mod tests {
             }
         }
         best
+    }
+
+    /// The excess by integer operations is the clamp it replaced, to the
+    /// bit: over random points at every scale, the faces themselves, the
+    /// signed zeros, the infinities and NaN.
+    #[test]
+    fn the_excess_beyond_a_box_is_the_clamp_to_the_bit() {
+        let by_clamp = |v: f32, h: f32| v - clamp(v, h);
+        let mut rng = 23u64;
+        for _ in 0..20_000 {
+            let h = (lcg(&mut rng) + 1.5) * 10f32.powi((lcg(&mut rng) * 6.0) as i32);
+            let v = lcg(&mut rng) * 3.0 * h;
+            for v in [v, h, -h, h.next_up(), (-h).next_down(), h.next_down()] {
+                let (a, b) = (beyond(v, h), by_clamp(v, h));
+                assert_eq!(
+                    a.to_bits(),
+                    b.to_bits(),
+                    "v {v:e}, h {h:e}: {a:e} against {b:e}"
+                );
+            }
+        }
+        for v in [
+            0.0,
+            -0.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MAX,
+            -f32::MAX,
+        ] {
+            assert_eq!(
+                beyond(v, 2.0).to_bits(),
+                by_clamp(v, 2.0).to_bits(),
+                "v {v:e}"
+            );
+        }
+        assert!(beyond(f32::NAN, 2.0).is_nan() && by_clamp(f32::NAN, 2.0).is_nan());
     }
 
     #[test]

@@ -969,12 +969,14 @@ impl Obstacle {
     /// d`, one division; inside (or a point not finite), the cold
     /// [`Obstacle::primitive_pair`] (the signed distance, as for every
     /// primitive).
-    // Out of line and cold, as `primitive_pair`, with its root inline:
-    // inline in `pair`, the root's fallback call crowded the registers of
-    // the whole pair loop (a PIPS + 8 step 155 instructions dearer, the
-    // exponent-8 super-ellipsoid's pair 3), for a box pair 1 cheaper.
-    #[cold]
-    #[inline(never)]
+    // Inline in `pair`, its excess by integer operations ([`from_box`]):
+    // out of line and cold, the call and its result through memory made a
+    // box pair 42 instructions dearer than today (161.7 against 119.9 in
+    // `step_count`'s loop of pairs). Inline with the excess by float
+    // clamps it crowded the registers of the whole pair loop (a PIPS + 8
+    // step 534 instructions dearer); with integer operations it costs that
+    // step 128 (0.2 %), about 2 a super-ellipsoid pair within influence.
+    #[inline(always)]
     fn cuboid_pair(&self, inflated: &Inflated, x: &Vec3) -> Pair {
         let o = from_box(x, &self.half_box);
         let out_sq = o.dot(&o);
@@ -1044,7 +1046,10 @@ impl Obstacle {
             self.rotation * local_gradient
         };
         by_clearance(clearance, gradient, || {
-            let distance = max(gap, 0.0);
+            // `max(gap, 0)` (the sign bit clears a negative gap: no float
+            // comparison), squared.
+            let bits = gap.to_bits();
+            let distance = f32::from_bits(bits & !(((bits as i32) >> 31) as u32));
             distance * distance
         })
     }
