@@ -971,7 +971,7 @@ impl Obstacle {
     /// primitive).
     // Inline in `pair`, its excess by integer operations ([`from_box`]):
     // out of line and cold, the call and its result through memory made a
-    // box pair 42 instructions dearer than today (161.7 against 119.9 in
+    // box pair 43 instructions dearer (161.7 against 118.9 in
     // `step_count`'s loop of pairs). Inline with the excess by float
     // clamps it crowded the registers of the whole pair loop (a PIPS + 8
     // step 534 instructions dearer); with integer operations it costs that
