@@ -75,12 +75,15 @@ pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
 
 /// The acceleration `a` with [`settle_change`]`(a) = e`: the time-optimal
 /// first move toward a velocity `e` away. Finite for finite `e`.
-#[inline(never)]
+#[inline]
 pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
     let x = e.abs() / (dt * u);
     // Largest m with m (m + 1) / 2 <= x.
     // (`max` with 0 first: a NaN gives 0.)
-    let m = max(0.0, floor_non_negative(0.5 * (sqrt(1.0 + 8.0 * x) - 1.0)));
+    let m = max(
+        0.0,
+        floor_non_negative(0.5 * (crate::math::sqrt_inline(1.0 + 8.0 * x) - 1.0)),
+    );
     let a = e.abs() / (dt * (m + 1.0)) + 0.5 * u * m;
     if e < 0.0 {
         -a
@@ -125,7 +128,7 @@ pub fn toward(v: f32, a: f32, target: f32, limits: &DriveLimits, dt: f32) -> f32
 /// `[-V - v, V - v]`, so the move is `F^-1(-v)` within the jerk and
 /// acceleration limits alone (and where [`viable`] is empty, that is the
 /// side it brakes to as well).
-#[inline(never)]
+#[inline]
 pub fn braking(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
     if v == 0.0 && a == 0.0 {
         return 0.0;
