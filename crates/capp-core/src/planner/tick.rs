@@ -48,7 +48,7 @@ use crate::target::Target;
 use crate::tracker::clearance::{stop_margin, Approach};
 use crate::tracker::profile::{braking_speed, stopping_span};
 use crate::tracker::slide::slide;
-use crate::tracker::DriveState;
+use crate::tracker::{excursion_of, DriveState};
 
 /// Most candidates a tick tries before braking.
 const MAX_TRIES: usize = 3;
@@ -187,7 +187,8 @@ impl<const N: usize> Planner<N> {
             let mut target = aim;
             target[..n].iter_mut().for_each(|t| *t *= share);
             let mut next = self.drive.toward(limits, dt, &target[..n]);
-            self.keep_in_range(scenario, &mut next);
+            let mut travel = [0.0f32; N];
+            self.keep_in_range(scenario, &mut next, &mut travel[..n]);
             let now = self.evals.now();
             let stop = stop_margin(
                 robot,
@@ -196,6 +197,7 @@ impl<const N: usize> Planner<N> {
                 &now.planes[..n],
                 &now.close_pairs,
                 &next,
+                &travel[..n],
                 limits,
                 dt,
                 fraction,
@@ -359,31 +361,40 @@ impl<const N: usize> Planner<N> {
     }
 
     /// A joint whose stop from `next` would leave its range brakes instead
-    /// (its stop from the current state was kept within it).
+    /// (its stop from the current state was kept within it); each joint's
+    /// excursion from the `next` that results into `travel`
+    /// ([`DriveState::excursion`], from the same stopping spans).
     fn keep_in_range<const M: usize, const W: usize>(
         &self,
         scenario: &Scenario<N, M, W>,
         next: &mut DriveState<N>,
+        travel: &mut [f32],
     ) {
         let limits = scenario.drive_limits();
         let n = self.n.min(N).min(limits.len());
         let dt = scenario.settings().time_step_s;
-        for (j, ((joint, l), &q)) in scenario
+        for (j, (((joint, l), &q), out)) in scenario
             .robot()
             .joints()
             .iter()
             .zip(limits)
             .zip(&self.q[..n])
+            .zip(travel.iter_mut())
             .enumerate()
         {
             let (Some(&v), Some(&a)) = (next.velocity().get(j), next.acceleration().get(j)) else {
                 continue;
             };
             let end = q + v * dt;
-            let (below, above) = stopping_span(v, a, l, dt);
-            if end - below < joint.min || end + above > joint.max {
+            let mut span = stopping_span(v, a, l, dt);
+            let mut speed = v;
+            if end - span.0 < joint.min || end + span.1 > joint.max {
                 next.brake_joint(j, &self.drive, l, dt);
+                if let (Some(&v), Some(&a)) = (next.velocity().get(j), next.acceleration().get(j)) {
+                    (span, speed) = (stopping_span(v, a, l, dt), v);
+                }
             }
+            *out = excursion_of(speed, span, dt);
         }
     }
 }

@@ -83,6 +83,9 @@ pub fn stop_is_clear<const N: usize>(
     dt: f32,
     fraction: f32,
 ) -> bool {
+    let mut travel = [0.0f32; N];
+    let n = robot.len().min(N);
+    after.excursion(limits, dt, &mut travel[..n]);
     stop_margin(
         robot,
         frames,
@@ -90,6 +93,7 @@ pub fn stop_is_clear<const N: usize>(
         planes,
         pairs,
         after,
+        &travel[..n],
         limits,
         dt,
         fraction,
@@ -107,6 +111,8 @@ pub fn stop_is_clear<const N: usize>(
 /// each joint's travel bound alone clears with that much to spare is left
 /// out. The tick chooses how far to slow its velocity target from a margin
 /// below 1, and how fast to speed up from one above ([`crate::planner`]).
+/// `travel` is each joint's [`DriveState::excursion`] from `after` (the
+/// tick has it from its joint-range check).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn stop_margin<const N: usize>(
@@ -116,6 +122,7 @@ pub fn stop_margin<const N: usize>(
     planes: &[Option<HalfSpace>],
     pairs: &[LinkPair],
     after: &DriveState<N>,
+    travel: &[f32],
     limits: &[DriveLimits],
     dt: f32,
     fraction: f32,
@@ -137,19 +144,11 @@ pub fn stop_margin<const N: usize>(
     // [`EXACT_MARGIN`] to spare by each joint's travel bound alone
     // ([`pair_cleared`]), are not followed tick by tick (a margin below
     // `EXACT_MARGIN` is the same without them).
-    let mut travel = [0.0f32; N];
-    after.excursion(limits, dt, &mut travel[..n]);
-    let sums = TravelSums::new(robot, &travel[..n]);
+    let travel = travel.get(..n).unwrap_or(travel);
+    let sums = TravelSums::new(robot, travel);
     let mut watched = [false; MAX_CLOSE_PAIRS];
     for (pair, w) in pairs.iter().zip(watched.iter_mut()) {
-        *w = !pair_cleared(
-            robot,
-            frames,
-            &travel[..n],
-            &sums,
-            pair,
-            fraction / EXACT_MARGIN,
-        );
+        *w = !pair_cleared(robot, frames, travel, &sums, pair, fraction / EXACT_MARGIN);
     }
     // Per link with a plane, its outward normal, and the most either end
     // moves toward it over the ticks.
@@ -413,7 +412,7 @@ impl<const N: usize> TravelSums<N> {
 
 /// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
 /// a NaN, so a bad value is never clear). Returns whether it went lower.
-#[inline(never)]
+#[inline]
 fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) -> bool {
     if need_sq == 0.0 && room_sq >= 0.0 {
         return false;

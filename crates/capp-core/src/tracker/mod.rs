@@ -245,11 +245,17 @@ impl<const N: usize> DriveState<N> {
             .zip(self.acceleration())
             .zip(limits)
         {
-            let step = v * dt;
-            let (below, above) = profile::stopping_span(v, a, l, dt);
-            *out = max((step - below).abs(), (step + above).abs());
+            *out = excursion_of(v, profile::stopping_span(v, a, l, dt), dt);
         }
     }
+}
+
+/// A joint's excursion ([`DriveState::excursion`]) at velocity `v` from
+/// its stopping span `(below, above)` ([`profile::stopping_span`]).
+#[inline(always)]
+pub fn excursion_of(v: f32, (below, above): (f32, f32), dt: f32) -> f32 {
+    let step = v * dt;
+    max((step - below).abs(), (step + above).abs())
 }
 
 /// The ticks of `dt` seconds the slowest of `limits` takes to turn around

@@ -75,8 +75,15 @@ pub fn settle_change(a: f32, u: f32, dt: f32) -> f32 {
 
 /// The acceleration `a` with [`settle_change`]`(a) = e`: the time-optimal
 /// first move toward a velocity `e` away. Finite for finite `e`.
-#[inline]
+#[inline(never)]
 pub fn acceleration_for(e: f32, u: f32, dt: f32) -> f32 {
+    acceleration_for_inline(e, u, dt)
+}
+
+/// [`acceleration_for`] inline: [`braking`]'s, which the stop test runs for
+/// every joint at every tick of every stop it simulates.
+#[inline(always)]
+fn acceleration_for_inline(e: f32, u: f32, dt: f32) -> f32 {
     let x = e.abs() / (dt * u);
     // Largest m with m (m + 1) / 2 <= x.
     // (`max` with 0 first: a NaN gives 0.)
@@ -136,7 +143,7 @@ pub fn braking(v: f32, a: f32, limits: &DriveLimits, dt: f32) -> f32 {
     let u = limits.max_jerk * dt;
     let low = max(-limits.max_accel, a - u);
     let high = min(limits.max_accel, a + u);
-    clamp(acceleration_for(-v, u, dt), low, high)
+    clamp(acceleration_for_inline(-v, u, dt), low, high)
 }
 
 /// A bound on how far (length units or radians) a joint at velocity `v`

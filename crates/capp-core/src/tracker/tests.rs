@@ -596,6 +596,8 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
             )
         };
         let rooms_sq: Vec<f32> = rooms[..n].iter().map(|r| r * r).collect();
+        let mut travel = vec![0.0f32; n];
+        after.excursion(&limits, dt, &mut travel);
         let margin = stop_margin(
             &robot,
             &frames,
@@ -603,6 +605,7 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
             &[None; N][..n],
             &pair,
             &after,
+            &travel,
             &limits,
             dt,
             fraction,
