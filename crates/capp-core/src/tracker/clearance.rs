@@ -105,8 +105,8 @@ pub fn stop_is_clear<const N: usize>(
 /// How much room the tick to `after` and the stop from there leave: the
 /// least, over every link and pair of [`stop_is_clear`]'s test, of the room
 /// it may use over the travel bound it needs (0 for a stop that does not
-/// end within [`MAX_STOP_TICKS`], a room already used up, or a value that
-/// is not a number). At least 1 means clear. Below [`EXACT_MARGIN`] it is
+/// end within [`MAX_STOP_TICKS`], a room already used up, a value that is
+/// not a number, or fewer `planes` than links). At least 1 means clear. Below [`EXACT_MARGIN`] it is
 /// exact; from there on a lower bound of the true margin only: a pair that
 /// each joint's travel bound alone clears with that much to spare is left
 /// out. The tick chooses how far to slow its velocity target from a margin
@@ -128,6 +128,29 @@ pub fn stop_margin<const N: usize>(
     fraction: f32,
 ) -> StopMargin {
     let n = robot.len().min(N).min(distance_sq.len());
+    // One plane entry per link (`None` for none), as the evaluation gives
+    // them: fewer is a caller's error, which refuses the stop rather than
+    // leave a link unchecked.
+    if planes.len() < n {
+        return StopMargin {
+            margin: 0.0,
+            approach: None,
+        };
+    }
+    // The pairs whose gap the stop might close; the others, cleared with
+    // [`EXACT_MARGIN`] to spare by each joint's travel bound alone
+    // ([`pair_cleared`]), are not followed tick by tick (a margin below
+    // `EXACT_MARGIN` is the same without them). In a block of its own, so
+    // that the running sums' stack is the stop's arrays' too (the board's
+    // stack budget).
+    let travel = travel.get(..n).unwrap_or(travel);
+    let mut watched = [false; MAX_CLOSE_PAIRS];
+    {
+        let sums = TravelSums::new(robot, travel);
+        for (pair, w) in pairs.iter().zip(watched.iter_mut()) {
+            *w = !pair_cleared(robot, frames, travel, &sums, pair, fraction / EXACT_MARGIN);
+        }
+    }
     // Squares of the largest travels, per link and per pair: square roots
     // once, at the end (the same bits: a correctly rounded root is
     // monotone).
@@ -140,22 +163,8 @@ pub fn stop_margin<const N: usize>(
     for (j, m) in moment[..n].iter_mut().enumerate() {
         *m = frames.axis(j).cross(&frames.pivot(j));
     }
-    // The pairs whose gap the stop might close; the others, cleared with
-    // [`EXACT_MARGIN`] to spare by each joint's travel bound alone
-    // ([`pair_cleared`]), are not followed tick by tick (a margin below
-    // `EXACT_MARGIN` is the same without them).
-    let travel = travel.get(..n).unwrap_or(travel);
-    let sums = TravelSums::new(robot, travel);
-    let mut watched = [false; MAX_CLOSE_PAIRS];
-    for (pair, w) in pairs.iter().zip(watched.iter_mut()) {
-        *w = !pair_cleared(robot, frames, travel, &sums, pair, fraction / EXACT_MARGIN);
-    }
-    // Per link with a plane, its outward normal, and the most either end
-    // moves toward it over the ticks.
-    let mut normals = [None; N];
-    for (normal, plane) in normals[..n].iter_mut().zip(planes) {
-        *normal = plane.map(|h| Vec3::new(h.normal[0], h.normal[1], h.normal[2]));
-    }
+    // Per link with a plane, the most either end moves toward it over the
+    // ticks.
     let mut toward = [[0.0f32; 2]; N];
     let mut x = [0.0f32; N];
     let mut largest = [0.0f32; N];
@@ -174,7 +183,7 @@ pub fn stop_margin<const N: usize>(
             robot,
             frames,
             &moment[..n],
-            &normals[..n],
+            planes,
             &x[..n],
             &mut first_sq[..n],
             &mut toward[..n],
@@ -465,15 +474,15 @@ fn between<const N: usize>(robot: &Robot<N>, excursion: &[f32], links: [u8; 2]) 
 /// ends: the velocity field of the displacement `x` (`v(p) = w x p + b`),
 /// one pass, with each revolute joint's `z_j x o_j` in `moment`; its prefix
 /// sums up to each joint into `turn` (`w`) and `shift` (`b`). Per link with
-/// a half-space's outward normal in `normals`, `toward[k] = max(toward[k],
-/// -normal . v)` at its pivot and at its far end (in that order): how far
-/// each end moves toward the plane.
+/// a half-space in `planes`, `toward[k] = max(toward[k], -normal . v)` at
+/// its pivot and at its far end (in that order), `normal` the half-space's
+/// outward normal: how far each end moves toward the plane.
 #[allow(clippy::too_many_arguments)]
 fn first_order<const N: usize>(
     robot: &Robot<N>,
     frames: &Frames<N>,
     moment: &[Vec3],
-    normals: &[Option<Vec3>],
+    planes: &[Option<HalfSpace>],
     x: &[f32],
     first_sq: &mut [f32],
     toward: &mut [[f32; 2]],
@@ -484,13 +493,13 @@ fn first_order<const N: usize>(
     let mut b = Vec3::zeros();
     let mut start_sq = 0.0f32;
     let segments = frames.has_segments();
-    for (j, ((((joint, &step), (out, t)), (tw, sb)), (m, normal))) in robot
+    for (j, ((((joint, &step), (out, t)), (tw, sb)), (m, plane))) in robot
         .joints()
         .iter()
         .zip(x)
         .zip(first_sq.iter_mut().zip(toward.iter_mut()))
         .zip(turn.iter_mut().zip(shift.iter_mut()))
-        .zip(moment.iter().zip(normals))
+        .zip(moment.iter().zip(planes))
         .enumerate()
     {
         match joint.kind {
@@ -514,7 +523,8 @@ fn first_order<const N: usize>(
             );
             *out = max(*out, ends_sq);
         }
-        if let Some(normal) = normal {
+        if let Some(h) = plane {
+            let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
             let start = w.cross(&frames.pivot(j)) + b;
             t[0] = max(t[0], -normal.dot(&start));
             t[1] = max(t[1], -normal.dot(&end));
