@@ -362,6 +362,32 @@ fn random_chain(rng: &mut Rng, n: usize) -> Vec<crate::Joint> {
 /// Joints of the stop tests' arms.
 const N: usize = 8;
 
+/// The robot of `joints` (DH) and their drive limits (the defaults from
+/// each rate); with `segments`, as general joints whose capsules are
+/// segments of their own, up to 0.5 off their chords and beyond their ends.
+fn arm_of(
+    rng: &mut Rng,
+    joints: &[crate::Joint],
+    segments: bool,
+) -> (crate::Robot<N>, Vec<DriveLimits>) {
+    let limits = joints
+        .iter()
+        .map(|j| DriveLimits::from_rate(j.max_rate))
+        .collect();
+    if !segments {
+        return (crate::Robot::<N>::new(joints).unwrap(), limits);
+    }
+    let mut general = joints.to_vec();
+    let tool = crate::robot::general_from_dh(joints, &mut general);
+    let mut robot = crate::Robot::<N>::new_with_tool(&general, &tool).unwrap();
+    let ends: Vec<[[f32; 3]; 2]> = joints
+        .iter()
+        .map(|_| [0, 1].map(|_| [0, 1, 2].map(|_| 0.5 * rng.uniform())))
+        .collect();
+    robot.set_link_segments(&ends).unwrap();
+    (robot, limits)
+}
+
 /// A random 3- to 7-joint chain at a random configuration, moving: a few
 /// ticks from rest toward random velocities (the stop tests' state).
 struct MovingArm {
@@ -378,22 +404,10 @@ impl MovingArm {
     fn random(rng: &mut Rng) -> Self {
         let n = 3 + (range(rng, 0.0, 5.0) as usize);
         let joints = random_chain(rng, n);
-        let mut robot = crate::Robot::<N>::new(&joints).unwrap();
         // Half the arms as general joints whose capsules are segments of
-        // their own, up to 0.5 off their chords and beyond their ends.
-        if rng.uniform() > 0.0 {
-            let mut general = joints.clone();
-            let tool = crate::robot::general_from_dh(&joints, &mut general);
-            robot = crate::Robot::<N>::new_with_tool(&general, &tool).unwrap();
-            let segments: Vec<[[f32; 3]; 2]> = (0..n)
-                .map(|_| [0, 1].map(|_| [0, 1, 2].map(|_| 0.5 * rng.uniform())))
-                .collect();
-            robot.set_link_segments(&segments).unwrap();
-        }
-        let limits: Vec<DriveLimits> = joints
-            .iter()
-            .map(|j| DriveLimits::from_rate(j.max_rate))
-            .collect();
+        // their own.
+        let segments = rng.uniform() > 0.0;
+        let (robot, limits) = arm_of(rng, &joints, segments);
         let q: Vec<f32> = (0..n).map(|_| rng.uniform() * 2.0).collect();
         let dt = 0.05;
         let mut after = DriveState::<N>::at_rest(n);
@@ -860,20 +874,7 @@ fn the_coarse_pair_bound_is_never_below_the_exact_need() {
                 }
             })
             .collect();
-        let mut robot = crate::Robot::<N>::new(&joints).unwrap();
-        if arm % 2 == 1 {
-            let mut general = joints.clone();
-            let tool = crate::robot::general_from_dh(&joints, &mut general);
-            robot = crate::Robot::<N>::new_with_tool(&general, &tool).unwrap();
-            let segments: Vec<[[f32; 3]; 2]> = (0..n)
-                .map(|_| [0, 1].map(|_| [0, 1, 2].map(|_| 0.5 * rng.uniform())))
-                .collect();
-            robot.set_link_segments(&segments).unwrap();
-        }
-        let limits: Vec<DriveLimits> = joints
-            .iter()
-            .map(|j| DriveLimits::from_rate(j.max_rate))
-            .collect();
+        let (robot, limits) = arm_of(&mut rng, &joints, arm % 2 == 1);
         let q: Vec<f32> = joints
             .iter()
             .map(|j| j.min + (j.max - j.min) * range(&mut rng, 0.0, 1.0))
