@@ -106,13 +106,14 @@ pub fn stop_is_clear<const N: usize>(
 /// least, over every link and pair of [`stop_is_clear`]'s test, of the room
 /// it may use over the travel bound it needs (0 for a stop that does not
 /// end within [`MAX_STOP_TICKS`], a room already used up, a value that is
-/// not a number, or fewer `planes` than links). At least 1 means clear. Below [`EXACT_MARGIN`] it is
-/// exact; from there on a lower bound of the true margin only: a pair that
-/// each joint's travel bound alone clears with that much to spare is left
-/// out. The tick chooses how far to slow its velocity target from a margin
-/// below 1, and how fast to speed up from one above ([`crate::planner`]).
-/// `travel` is each joint's [`DriveState::excursion`] from `after` (the
-/// tick has it from its joint-range check).
+/// not a number, or fewer `planes` than links). At least 1 means clear.
+/// Below [`EXACT_MARGIN`] it is exact; from there on a lower bound of the
+/// true margin only: a pair that each joint's travel bound alone clears
+/// with that much to spare is left out. The tick chooses how far to slow
+/// its velocity target from a margin below 1, and how fast to speed up
+/// from one above ([`crate::planner`]). `travel` is each joint's
+/// [`DriveState::excursion`] from `after` (the tick has it from its
+/// joint-range check).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn stop_margin<const N: usize>(
@@ -356,6 +357,8 @@ pub(super) fn pair_need<const N: usize>(
 pub(super) struct TravelSums<const N: usize> {
     revolute: [f32; N],
     prismatic: [f32; N],
+    /// How many joints are summed.
+    joints: usize,
 }
 
 impl<const N: usize> TravelSums<N> {
@@ -363,6 +366,7 @@ impl<const N: usize> TravelSums<N> {
         let mut sums = TravelSums {
             revolute: [0.0; N],
             prismatic: [0.0; N],
+            joints: 0,
         };
         let (mut revolute, mut prismatic) = (0.0f32, 0.0f32);
         for (((joint, &s), r), p) in robot
@@ -377,12 +381,14 @@ impl<const N: usize> TravelSums<N> {
                 JointKind::Prismatic => prismatic += s,
             }
             (*r, *p) = (revolute, prismatic);
+            sums.joints += 1;
         }
         sums
     }
 
     /// An upper bound of the need [`pair_cleared`] computes for link `b`
-    /// when the joints `a + 1 ..= b` move (infinity for links out of range),
+    /// when the joints `a + 1 ..= b` move (infinity for links out of order
+    /// or beyond the joints summed),
     /// from `L`, link `b`'s `capsule_chain` less link `a`'s `chain` (the
     /// chain's length from `o_{a+1}` on, so at least `|p - o_j|` for every
     /// point `p` of link `b` and `j > a`), and the sums `T` of the revolute
@@ -406,7 +412,7 @@ impl<const N: usize> TravelSums<N> {
         ) else {
             return f32::INFINITY;
         };
-        if a >= b {
+        if a >= b || b >= self.joints {
             return f32::INFINITY;
         }
         const SUMS: f32 = 1.0e-5;
