@@ -11,7 +11,7 @@
 //! ```
 //!
 //! At validation each joint's frame is turned once so that its axis is its
-//! `z` ([`align_z`]): with `A_j` taking `z` onto `axis_j`, the stored origin
+//! `z` (`align_z`): with `A_j` taking `z` onto `axis_j`, the stored origin
 //! is `A_{j-1}^T O_j A_j` and the stored tool `A_{n-1}^T tool`, and the
 //! motion becomes a rotation about (a slide along) `z`. The chain is then
 //! "fixed transform, rotate about z", about 81 flops a joint, with no

@@ -111,9 +111,11 @@ pub fn stop_is_clear<const N: usize>(
 /// true margin only: a pair that each joint's travel bound alone clears
 /// with that much to spare is left out. The tick chooses how far to slow
 /// its velocity target from a margin below 1, and how fast to speed up
-/// from one above ([`crate::planner`]). `travel` is each joint's
+/// from one above ([`crate::planner`]). `travel` must be each joint's
 /// [`DriveState::excursion`] from `after` (the tick has it from its
-/// joint-range check).
+/// joint-range check; [`stop_is_clear`] computes it): the pairs left out
+/// are cleared by it, so a smaller one would leave out pairs the stop may
+/// close.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn stop_margin<const N: usize>(
