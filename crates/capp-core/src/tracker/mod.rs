@@ -183,11 +183,6 @@ impl<const N: usize> DriveState<N> {
             .zip(&mut self.acceleration[..n])
             .zip(limits)
         {
-            // At rest it stays (as `braking` would have it: +0 both).
-            if *v == 0.0 && *a == 0.0 {
-                (*v, *a) = (0.0, 0.0);
-                continue;
-            }
             *a = profile::braking(*v, *a, l, dt);
             *v += *a * dt;
         }
