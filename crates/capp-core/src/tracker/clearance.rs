@@ -391,9 +391,9 @@ impl<const N: usize> TravelSums<N> {
     /// An upper bound of the need [`pair_cleared`] computes for link `b`
     /// when the joints `a + 1 ..= b` move (infinity for links out of order
     /// or beyond the joints summed), from `L`, link `b`'s `capsule_chain`
-    /// less link `a`'s `chain` (the
-    /// chain's length from `o_{a+1}` on, so at least `|p - o_j|` for every
-    /// point `p` of link `b` and `j > a`), and the sums `T` of the revolute
+    /// less link `a`'s `chain` (the chain's length from `o_{a+1}` on, so at
+    /// least `|p - o_j|` for every point `p` of link `b` and `j > a`), and
+    /// the sums `T` of the revolute
     /// and `S` of the prismatic joints' travels over `a + 1 ..= b`. First
     /// order: a revolute joint's lever `|z_j x (p - o_j)|` is at most `L`, a
     /// prismatic joint's is 1: `L T + S`. Second order ([`between`]'s
