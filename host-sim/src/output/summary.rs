@@ -3,9 +3,10 @@
 //! folder ([`super::write_run`]): outcome, steps, final errors, the smallest
 //! clearance, the closest pair of link capsules (when the scenario checks
 //! self-collision; over the rows, by the independent model of
-//! [`crate::geometry`]), joint range use, the dead-end escapes told in words,
-//! setpoints, wall time and, for a plan received from a board, what happened
-//! on the line.
+//! [`crate::geometry`]), joint range use, for a tracked plan the speed the
+//! arm used ([`SpeedUse`]), the dead-end escapes told in words, setpoints,
+//! wall time and, for a plan received from a board, what happened on the
+//! line.
 
 use std::fmt;
 
@@ -13,7 +14,7 @@ use capp_core::Outcome;
 
 use crate::escapes::{self, Kind, Stretch};
 use crate::geometry::{Geometry, LinkGap};
-use crate::plan::RunResult;
+use crate::plan::{Row, RunResult};
 use crate::problem::Problem;
 
 /// Lower-case name of an outcome.
@@ -58,6 +59,74 @@ pub struct Summary {
     /// Where the planner escaped dead ends (`None`: not known, a plan
     /// received from a board).
     pub escapes: Option<EscapeSummary>,
+    /// How fast a tracked plan moved (`None`: a stepped plan, or no tick
+    /// moved).
+    pub speed: Option<SpeedUse>,
+}
+
+/// How much of its joints' rate limits a tracked plan used, and how often
+/// the tracker refused a candidate tick (issue 22): near obstacles the
+/// stop after every tick must fit the room, so the arm moves slower than
+/// the law asks; these say how much slower.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedUse {
+    /// Rows that moved (every tick is a row of a plan made here; a board's
+    /// stream has its setpoints): some joint above
+    /// [`crate::drive_check::AT_REST_FRACTION`] of its rate (the rest a
+    /// tracked plan arrives at).
+    pub moving_rows: usize,
+    /// Over those rows, the median of the largest `|v_j| / max_rate_j`.
+    pub median: f64,
+    /// Its largest value over the run.
+    pub peak: f64,
+    /// Candidate ticks the tracker refused (their stop not clear, or
+    /// creeping onto a surface) and the ticks that had any (`None`: not
+    /// known, a plan received from a board).
+    pub refused: Option<(u64, usize)>,
+}
+
+impl SpeedUse {
+    /// From the rows' velocities (one per joint, per s) against `rates`
+    /// (each joint's `max_rate`, per s); `None` when no tick moved.
+    pub fn new(rates: &[f64], rows: &[Row]) -> Option<SpeedUse> {
+        let mut used: Vec<f64> = rows
+            .iter()
+            .map(|r| {
+                r.velocity
+                    .iter()
+                    .zip(rates)
+                    .map(|(&v, &rate)| (v as f64).abs() / rate)
+                    .fold(0.0, f64::max)
+            })
+            .filter(|&u| u > crate::drive_check::AT_REST_FRACTION)
+            .collect();
+        if used.is_empty() {
+            return None;
+        }
+        used.sort_by(f64::total_cmp);
+        let n = used.len();
+        let median = if n % 2 == 1 {
+            used[n / 2]
+        } else {
+            0.5 * (used[n / 2 - 1] + used[n / 2])
+        };
+        let refused = rows
+            .iter()
+            .map(|r| r.halvings)
+            .collect::<Option<Vec<u8>>>()
+            .map(|h| {
+                (
+                    h.iter().map(|&k| k as u64).sum(),
+                    h.iter().filter(|&&k| k > 0).count(),
+                )
+            });
+        Some(SpeedUse {
+            moving_rows: n,
+            median,
+            peak: used[n - 1],
+            refused,
+        })
+    }
 }
 
 /// One escape motion, as the summary tells it.
@@ -410,6 +479,13 @@ impl Summary {
             unit: problem.length_unit.clone(),
             link: None,
             escapes: EscapeSummary::new(problem, result),
+            speed: (problem.settings.motion == capp_core::Motion::Tracked)
+                .then(|| {
+                    let rates: Vec<f64> =
+                        problem.drive.joints.iter().map(|j| j.max_rate).collect();
+                    SpeedUse::new(&rates, &result.rows)
+                })
+                .flatten(),
         }
     }
 }
@@ -473,6 +549,21 @@ impl fmt::Display for Summary {
             100.0 * self.range_use.0,
             self.range_use.1
         )?;
+        if let Some(speed) = &self.speed {
+            writeln!(
+                f,
+                "speed used:        median {:.0}% of the rate limits over {} moving rows (peak {:.0}%)",
+                100.0 * speed.median,
+                speed.moving_rows,
+                100.0 * speed.peak
+            )?;
+            if let Some((candidates, ticks)) = speed.refused {
+                writeln!(
+                    f,
+                    "refused:           {candidates} candidate ticks, on {ticks} ticks (the stop after them not clear, or creeping onto a surface)"
+                )?;
+            }
+        }
         if let Some(escapes) = &self.escapes {
             write!(f, "{escapes}")?;
         }
@@ -486,5 +577,64 @@ impl fmt::Display for Summary {
             write!(f, "{link}")?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row of two joints moving at `velocity`, with `refused` candidates.
+    fn row(velocity: [f32; 2], refused: Option<u8>) -> Row {
+        Row {
+            step: 0,
+            h: 0.05,
+            q: vec![0.0; 2],
+            velocity: velocity.to_vec(),
+            acceleration: vec![0.0; 2],
+            position: [0.0; 3],
+            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            v: 0.0,
+            position_error: 0.0,
+            orientation_error: 0.0,
+            clearance: None,
+            waypoint: 0,
+            constrained: None,
+            halvings: refused,
+            escape: None,
+            setpoint: false,
+        }
+    }
+
+    #[test]
+    fn speed_use_is_the_most_loaded_joint_over_the_moving_rows() {
+        // Rates 2 and 0.5 per s: the ticks use 0.25, 0.8 (joint 2 against
+        // its own rate, not joint 1's larger speed), 0.5 and 1.0; the first
+        // and last rows are at rest (below 1 % of either rate), not counted.
+        let rates = [2.0, 0.5];
+        let rows = [
+            row([0.0, 0.004], Some(0)),
+            row([0.5, 0.1], Some(2)),
+            row([-1.5, 0.4], Some(0)),
+            row([1.0, -0.2], Some(1)),
+            row([0.3, -0.5], Some(3)),
+            row([0.01, 0.0], Some(0)),
+        ];
+        let speed = SpeedUse::new(&rates, &rows).unwrap();
+        assert_eq!(speed.moving_rows, 4);
+        // Sorted 0.25, 0.5, 0.8, 1.0: the median is between the middle two.
+        assert!((speed.median - 0.65).abs() < 1e-6, "{speed:?}");
+        assert!((speed.peak - 1.0).abs() < 1e-6, "{speed:?}");
+        assert_eq!(speed.refused, Some((6, 3)));
+    }
+
+    #[test]
+    fn speed_use_knows_no_refusals_a_board_did_not_send_and_no_speed_at_rest() {
+        let rates = [1.0, 1.0];
+        let rows = [row([0.0, 0.0], None), row([0.3, 0.1], None)];
+        let speed = SpeedUse::new(&rates, &rows).unwrap();
+        assert_eq!((speed.moving_rows, speed.refused), (1, None));
+        assert!((speed.median - 0.3).abs() < 1e-6);
+        assert_eq!(SpeedUse::new(&rates, &[row([0.001, 0.0], Some(0))]), None);
     }
 }
