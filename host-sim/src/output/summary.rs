@@ -481,8 +481,7 @@ impl Summary {
             escapes: EscapeSummary::new(problem, result),
             speed: (problem.settings.motion == capp_core::Motion::Tracked)
                 .then(|| {
-                    let rates: Vec<f64> =
-                        problem.drive.joints.iter().map(|j| j.max_rate).collect();
+                    let rates: Vec<f64> = problem.drive.joints.iter().map(|j| j.max_rate).collect();
                     SpeedUse::new(&rates, &result.rows)
                 })
                 .flatten(),
