@@ -61,6 +61,34 @@ pub struct Row {
     pub setpoint: bool,
 }
 
+impl Row {
+    /// A row of step `step` (reached by a step of `h` seconds) at the joint
+    /// values `q`, at rest, with nothing else known of it: no pose (the
+    /// identity), no error, no clearance, no step report. What a test or a
+    /// tool that has only configurations builds its rows from.
+    pub fn with_joints(step: u32, h: f32, q: Vec<f32>) -> Row {
+        let n = q.len();
+        Row {
+            step,
+            h,
+            q,
+            velocity: vec![0.0; n],
+            acceleration: vec![0.0; n],
+            position: [0.0; 3],
+            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            v: 0.0,
+            position_error: 0.0,
+            orientation_error: 0.0,
+            clearance: None,
+            waypoint: 0,
+            constrained: None,
+            halvings: None,
+            escape: None,
+            setpoint: true,
+        }
+    }
+}
+
 /// A finished plan.
 #[derive(Clone, Debug)]
 pub struct RunResult {

@@ -363,23 +363,9 @@ fn a_step_through_a_link_is_a_self_collision_and_the_oracle_refuses_it() {
     }
 
     // The checker: two clear rows, one self-collision between them.
-    let row = |step: u32, q: &[f64]| Row {
-        step,
-        h: if step == 0 { 0.0 } else { 0.05 },
-        q: q.iter().map(|&x| x as f32).collect(),
-        velocity: vec![0.0; q.len()],
-        acceleration: vec![0.0; q.len()],
-        position: [0.0; 3],
-        rotation: [[0.0; 3]; 3],
-        v: 0.0,
-        position_error: 0.0,
-        orientation_error: 0.0,
-        clearance: None,
-        waypoint: 0,
-        constrained: None,
-        halvings: None,
-        escape: None,
-        setpoint: true,
+    let row = |step: u32, q: &[f64]| {
+        let h = if step == 0 { 0.0 } else { 0.05 };
+        Row::with_joints(step, h, q.iter().map(|&x| x as f32).collect())
     };
     let result = RunResult {
         rows: vec![row(0, &a), row(1, &b)],

@@ -585,24 +585,10 @@ mod tests {
 
     /// A row of two joints moving at `velocity`, with `refused` candidates.
     fn row(velocity: [f32; 2], refused: Option<u8>) -> Row {
-        Row {
-            step: 0,
-            h: 0.05,
-            q: vec![0.0; 2],
-            velocity: velocity.to_vec(),
-            acceleration: vec![0.0; 2],
-            position: [0.0; 3],
-            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            v: 0.0,
-            position_error: 0.0,
-            orientation_error: 0.0,
-            clearance: None,
-            waypoint: 0,
-            constrained: None,
-            halvings: refused,
-            escape: None,
-            setpoint: false,
-        }
+        let mut row = Row::with_joints(1, 0.05, vec![0.0; 2]);
+        row.velocity = velocity.to_vec();
+        row.halvings = refused;
+        row
     }
 
     #[test]
