@@ -571,7 +571,7 @@ impl fmt::Display for Summary {
         if let Some(link) = &self.link {
             writeln!(
                 f,
-                "planned by:        the board (rows are its setpoints; clearance, errors and range use over them)"
+                "planned by:        the board (rows are its setpoints; clearance, errors, range use and speed used over them)"
             )?;
             write!(f, "{link}")?;
         }
