@@ -63,9 +63,10 @@ pub struct Row {
 
 impl Row {
     /// A row of step `step` (reached by a step of `h` seconds) at the joint
-    /// values `q`, at rest, with nothing else known of it: no pose (the
-    /// identity), no error, no clearance, no step report. What a test or a
-    /// tool that has only configurations builds its rows from.
+    /// values `q`, at rest, with nothing else computed: the end effector's
+    /// pose left at the origin, unturned, no error, no clearance, no step
+    /// report. What a test or a tool that has only configurations builds
+    /// its rows from.
     pub fn with_joints(step: u32, h: f32, q: Vec<f32>) -> Row {
         let n = q.len();
         Row {
