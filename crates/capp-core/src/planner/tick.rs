@@ -85,8 +85,9 @@ pub const REST_FRACTION: f32 = 0.01;
 /// margin at about `1 / SHARE_BACKOFF` when the room stays: fast where there
 /// is room, slowing a little as the room closes in, instead of speeding up
 /// by a fixed factor until a refusal brakes the arm. From
-/// [`crate::tracker::clearance::EXACT_MARGIN`] on, `m` is a lower bound of
-/// the room, so the growth is too. It is not capped there (it was, at
+/// [`crate::tracker::clearance::EXACT_MARGIN`] on, the true margin is only
+/// known to be at least that (link pairs cleared by that much are left
+/// out), so the growth may overshoot the room. It is not capped there (it was, at
 /// 1.42x a tick): a share is only a velocity target, which the drive
 /// approaches within its acceleration and jerk limits and the next
 /// candidate's stop is checked, while a cap kept an arm that had slowed for

@@ -35,8 +35,9 @@ use crate::robot::{JointKind, Robot};
 use crate::self_collision::field::{LinkPair, MAX_CLOSE_PAIRS};
 use crate::step_size::SecondOrder;
 
-/// [`stop_margin`] is exact below this margin (at and above it, a lower
-/// bound): the tick grows its speed by up to its square root.
+/// [`stop_margin`] is exact below this margin (at and above it, the true
+/// margin is at least this, and may be below the value returned): the tick
+/// grows its speed by up to its square root.
 pub const EXACT_MARGIN: f32 = 2.25;
 
 /// Most ticks of a stop the test simulates; a stop that has not reached
@@ -107,9 +108,10 @@ pub fn stop_is_clear<const N: usize>(
 /// it may use over the travel bound it needs (0 for a stop that does not
 /// end within [`MAX_STOP_TICKS`], a room already used up, a value that is
 /// not a number, or fewer `planes` than links). At least 1 means clear.
-/// Below [`EXACT_MARGIN`] it is exact; from there on a lower bound of the
-/// true margin only: a pair that each joint's travel bound alone clears
-/// with that much to spare is left out. The tick chooses how far to slow
+/// Below [`EXACT_MARGIN`] it is exact; from there on the true margin is
+/// only known to be at least `EXACT_MARGIN`, and may be below the value
+/// returned: a pair that each joint's travel bound alone clears with that
+/// much to spare is left out of the least. The tick chooses how far to slow
 /// its velocity target from a margin below 1, and how fast to speed up
 /// from one above ([`crate::planner`]). `travel` must be each joint's
 /// [`DriveState::excursion`] from `after` (the tick has it from its

@@ -561,9 +561,10 @@ fn a_cleared_stop_never_moves_a_link_farther_than_its_room() {
 /// margin` (a hair more) the same tick and stop are cleared, and with a
 /// hair less refused, for a link's own room and for a pair's gap alike.
 /// The tick sizes its next candidate from it, and its speed-up after a
-/// taken tick. (From `EXACT_MARGIN` on it is a lower bound: pairs the
-/// joints' travel bounds clear by that much are not followed; with them
-/// left out from a margin of 1, this test fails.)
+/// taken tick. (From `EXACT_MARGIN` on the true margin is only known to be
+/// at least that: pairs the joints' travel bounds clear by that much are
+/// not followed, so the value may name more room than the stop leaves;
+/// with them left out from a margin of 1, this test fails.)
 #[test]
 fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
     use super::clearance::{stop_is_clear, stop_margin};
