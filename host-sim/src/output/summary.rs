@@ -110,16 +110,10 @@ impl SpeedUse {
         } else {
             0.5 * (used[n / 2 - 1] + used[n / 2])
         };
-        let refused = rows
-            .iter()
-            .map(|r| r.halvings)
-            .collect::<Option<Vec<u8>>>()
-            .map(|h| {
-                (
-                    h.iter().map(|&k| k as u64).sum(),
-                    h.iter().filter(|&&k| k > 0).count(),
-                )
-            });
+        let refused = rows.iter().try_fold((0u64, 0usize), |(sum, ticks), r| {
+            r.halvings
+                .map(|k| (sum + k as u64, ticks + usize::from(k > 0)))
+        });
         Some(SpeedUse {
             moving_rows: n,
             median,
@@ -479,12 +473,12 @@ impl Summary {
             unit: problem.length_unit.clone(),
             link: None,
             escapes: EscapeSummary::new(problem, result),
-            speed: (problem.settings.motion == capp_core::Motion::Tracked)
-                .then(|| {
-                    let rates: Vec<f64> = problem.drive.joints.iter().map(|j| j.max_rate).collect();
-                    SpeedUse::new(&rates, &result.rows)
-                })
-                .flatten(),
+            speed: if problem.settings.motion == capp_core::Motion::Tracked {
+                let rates: Vec<f64> = problem.drive.joints.iter().map(|j| j.max_rate).collect();
+                SpeedUse::new(&rates, &result.rows)
+            } else {
+                None
+            },
         }
     }
 }
