@@ -356,6 +356,10 @@ fn check_cmd(path: &Path, scenario: Option<&Path>) -> Result<ExitCode> {
     let (file, problem) = locate(path, scenario)?;
     let t = trajectory::read(&file)?;
     let report = check::check(&problem, &t);
+    // The obstacles checked are the planner's: a mesh's enclosure, say so.
+    for note in &problem.notes {
+        say(&format!("note: {note}\n"));
+    }
     say(&report.to_string());
     Ok(if report.accepted() {
         ExitCode::SUCCESS

@@ -34,6 +34,7 @@ pub mod acm;
 pub mod check;
 pub mod cli;
 pub mod drive_check;
+pub mod enclosure;
 pub mod escapes;
 pub mod geometry;
 pub mod input;

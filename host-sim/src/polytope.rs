@@ -142,6 +142,50 @@ impl Face {
 /// The corners of the convex hull of `points` (deduplicated, in no
 /// particular order): see the module docs.
 pub fn hull_vertices(points: &[V3]) -> Result<Vec<V3>, HullFailure> {
+    cloud_hull(points).map(|hull| hull.corners)
+}
+
+/// A boundary triangle of a [`CloudHull`]: its corners (counter-clockwise
+/// seen from outside) and its plane, `normal . x = offset` (outward unit
+/// normal, length units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HullTriangle {
+    /// The triangle's corners.
+    pub corners: [V3; 3],
+    /// Outward unit normal.
+    pub normal: V3,
+    /// `normal . x` on the plane, length units.
+    pub offset: f64,
+}
+
+/// The convex hull of a point cloud, as [`cloud_hull`] builds it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CloudHull {
+    /// Its corners ([`hull_vertices`]).
+    pub corners: Vec<V3>,
+    /// Its boundary, triangulated (points in the middle of a face or an
+    /// edge may be triangle corners).
+    pub triangles: Vec<HullTriangle>,
+}
+
+impl CloudHull {
+    /// The distance from `x` to the hull, 0 inside: the least over the
+    /// triangles whose plane has `x` in front (see the module docs).
+    pub fn distance(&self, x: V3) -> f64 {
+        self.triangles
+            .iter()
+            .filter(|t| dot(t.normal, x) > t.offset)
+            .map(|t| triangle_distance(x, t.corners))
+            .fold(None, |least: Option<f64>, d| {
+                Some(least.map_or(d, |l| l.min(d)))
+            })
+            .unwrap_or(0.0)
+    }
+}
+
+/// The convex hull of `points`: its corners and its triangulated boundary
+/// (see the module docs).
+pub fn cloud_hull(points: &[V3]) -> Result<CloudHull, HullFailure> {
     if points.is_empty() {
         return Err(HullFailure::Empty);
     }
@@ -249,7 +293,7 @@ pub fn hull_vertices(points: &[V3]) -> Result<Vec<V3>, HullFailure> {
         u.sort_unstable();
         u
     };
-    Ok(used
+    let corners = used
         .iter()
         .filter(|&&v| {
             let d = incident[&v];
@@ -258,7 +302,17 @@ pub fn hull_vertices(points: &[V3]) -> Result<Vec<V3>, HullFailure> {
             used.iter().all(|&u| u == v || dot(d, pts[u]) < top - eps_d)
         })
         .map(|&v| pts[v])
-        .collect())
+        .collect();
+    let triangles = faces
+        .iter()
+        .filter(|f| f.alive)
+        .map(|f| HullTriangle {
+            corners: f.v.map(|v| pts[v]),
+            normal: f.normal,
+            offset: f.offset,
+        })
+        .collect();
+    Ok(CloudHull { corners, triangles })
 }
 
 /// A face of a [`Polytope`]: its outward unit normal, `n . x = offset` on

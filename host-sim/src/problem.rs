@@ -216,6 +216,10 @@ impl DriveLimits {
 pub struct Problem {
     /// Short name (the file stem unless the file names it).
     pub name: String,
+    /// What the reader did that the user should know of, one line each
+    /// (a mesh planned round an enclosure of its hull: `capp run` and
+    /// `capp check` print them).
+    pub notes: Vec<String>,
     /// One paragraph of description (may be empty).
     pub description: String,
     /// The file it was read from.

@@ -624,7 +624,8 @@ fn mesh_parts_errors_are_one_line_at_the_obstacle() {
             "{keys}: {e}"
         );
     }
-    // A 20-sided prism (40 corners) beside a box: that part is named.
+    // A 20-sided prism (40 corners) beside a box: that part is planned
+    // round an enclosure of 32 corners, and the note names it.
     let ring = |k: usize, z: f32| {
         let a = std::f32::consts::TAU * (k % 20) as f32 / 20.0;
         [0.1 * a.cos(), 0.1 * a.sin(), z]
@@ -642,14 +643,18 @@ fn mesh_parts_errors_are_one_line_at_the_obstacle() {
     }
     prism.extend(moved(&box_triangles([0.05, 0.05, 0.05]), [0.5, 0.0, 0.0]));
     std::fs::write(dir.path().join("drum.stl"), binary_stl(&prism)).unwrap();
-    let e = load_in(
+    let p = load_in(
         dir.path(),
-        "\n[[obstacles]]\nshape = \"mesh\"\nmesh = \"drum.stl\"\ncentre = [1.0, 0.5, 0.0]\n",
+        "\n[[obstacles]]\nname = \"drum\"\nshape = \"mesh\"\nmesh = \"drum.stl\"\ncentre = [1.0, 0.5, 0.0]\n",
     )
-    .unwrap_err();
+    .unwrap();
+    assert_eq!(p.hulls.len(), 2);
+    assert!(p.hulls[0].len() <= 32 && p.hulls[1].len() == 8);
+    assert_eq!(p.notes.len(), 1, "{:?}", p.notes);
     assert!(
-        e.contains("mesh \"drum.stl\": part 1 of 2: its hull has 40 vertices"),
-        "{e}"
+        p.notes[0].starts_with(&format!("obstacle \"drum part 1\" (line {line}): its hull has 40 corners, more than the 32 a hull may have: planned round an enclosing hull of ")),
+        "{:?}",
+        p.notes
     );
     // Nine small boxes as one hull fit.
     let p = load_in(dir.path(), &one("parts = \"one\"")).unwrap();
@@ -696,4 +701,83 @@ fn the_arm_reaches_between_a_meshs_parts_and_not_into_one_hull_round_them() {
         stdout.contains("outcome:") && !stdout.contains("outcome:           reached"),
         "{stdout}"
     );
+}
+
+/// A closed cylinder round z of `sides` sides (radius `r`, half-height
+/// `h`), as triangles: a curved CAD part, its hull `2 sides` corners.
+fn drum_triangles(sides: usize, r: f32, h: f32) -> Vec<[[f32; 3]; 3]> {
+    let ring = |k: usize, z: f32| {
+        let a = std::f32::consts::TAU * (k % sides) as f32 / sides as f32;
+        [r * a.cos(), r * a.sin(), z]
+    };
+    let mut triangles = Vec::new();
+    for k in 0..sides {
+        let (a, b) = (ring(k, -h), ring(k + 1, -h));
+        let (c, d) = (ring(k, h), ring(k + 1, h));
+        triangles.extend([
+            [a, b, d],
+            [a, d, c],
+            [[0.0, 0.0, -h], b, a],
+            [[0.0, 0.0, h], c, d],
+        ]);
+    }
+    triangles
+}
+
+#[test]
+fn a_curved_part_beyond_the_corner_budget_is_planned_round_an_enclosure_that_holds_it() {
+    // A drum of 64 sides (a hull of 128 corners, four times what a hull
+    // may have) in the planar arm's way: the loader encloses it in at most
+    // 32 corners and says so, every point of the part is inside the
+    // enclosure (the checker's own faces of it), `capp run` prints the note
+    // and reaches the target round it, and `capp check` accepts the run.
+    let dir = tempfile::tempdir().unwrap();
+    let triangles = drum_triangles(64, 0.1, 0.2);
+    std::fs::write(dir.path().join("drum.stl"), binary_stl(&triangles)).unwrap();
+    let path = write(
+        dir.path(),
+        "cell.toml",
+        &format!(
+            "{}\n[[obstacles]]\nname = \"drum\"\nshape = \"mesh\"\nmesh = \"drum.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n",
+            head()
+        ),
+    );
+    let p = Problem::load(&path).unwrap();
+    assert_eq!(p.hulls.len(), 1);
+    assert!(p.hulls[0].len() <= 32, "{}", p.hulls[0].len());
+    assert!(Hull::new(&p.hulls[0]).is_ok());
+    let line = head().lines().count() + 2;
+    assert_eq!(p.notes.len(), 1);
+    let note = &p.notes[0];
+    let prefix = format!("obstacle \"drum\" (line {line}): its hull has 128 corners, more than the 32 a hull may have: planned round an enclosing hull of ");
+    assert!(note.starts_with(&prefix), "{note}");
+    // "... at most X m outside the part": the 16 or so planes round a
+    // circle of radius 0.1 leave at most a few millimetres.
+    let outside: f64 = note
+        .rsplit("at most ")
+        .next()
+        .and_then(|t| t.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap();
+    assert!(outside > 0.0 && outside < 0.005, "{note}");
+    // Every vertex of the part is inside the enclosure, and some are on
+    // its surface (it is tight): the checker's exact signed distance.
+    let polytopes = hull_polytopes(&p);
+    let (mut deepest, mut nearest) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in triangles.iter().flatten() {
+        let d = signed_distance(&p.obstacles[0].shape, &polytopes, v.map(f64::from));
+        assert!(d <= 1e-6, "a vertex of the part outside the enclosure: {d}");
+        (deepest, nearest) = (deepest.min(d), nearest.max(d));
+    }
+    assert!(nearest > -1e-5, "the enclosure touches the part: {nearest}");
+    assert!(deepest > -outside - 1e-6, "{deepest} {outside}");
+    // End to end.
+    let out = dir.path().join("run");
+    let stdout = common::run_rendered(&path, &out);
+    assert!(
+        stdout.contains(&format!("note:              {prefix}")),
+        "{stdout}"
+    );
+    assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    common::check_accepts(&out);
 }

@@ -305,6 +305,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     // The listing has no drive limits: the defaults from its rates.
     let drive = crate::problem::DriveLimits::defaults(&joints);
     Ok(Problem {
+        notes: Vec::new(),
         tool: capp_core::robot::Placement::IDENTITY,
         urdf: None,
         joint_goals: Vec::new(),

@@ -16,6 +16,8 @@ use std::path::Path;
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
 use capp_core::obstacle::{Hull, MAX_HULLS, MAX_HULL_VERTICES};
+
+use crate::enclosure::{enclose, Enclosure};
 use capp_core::{
     pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, Shape, Solid, Waypoint,
 };
@@ -369,21 +371,37 @@ fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3
     groups.into_values().collect()
 }
 
+/// A mesh part's hull as the core takes it: its convex hull, or, when that
+/// has more than [`MAX_HULL_VERTICES`] corners (a curved CAD part), an
+/// enclosure of at most that many ([`crate::enclosure`]), with what it is.
+struct MeshHull {
+    corners: Vec<[f32; 3]>,
+    enclosure: Enclosure,
+}
+
+/// [`MeshHull`] of `points` (obstacle frame, length units), or why not.
+fn mesh_hull(points: &[[f64; 3]]) -> Result<MeshHull, NoHull> {
+    let enclosure = enclose(points, MAX_HULL_VERTICES).map_err(NoHull::Points)?;
+    Ok(MeshHull {
+        corners: enclosure
+            .corners
+            .iter()
+            .map(|v| v.map(|x| x as f32))
+            .collect(),
+        enclosure,
+    })
+}
+
 /// The hulls of a mesh's `parts` (already scaled): one per part when
 /// `separate` and every part spans a volume of its own (a closed part), or
 /// else one round them all (an open surface, such as a mesh of loose
 /// faces, has flat parts: then the mesh is one hull, as a mesh always was).
-fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<Vec<[f32; 3]>>, String> {
+fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<MeshHull>, String> {
     if separate && parts.len() > 1 {
         let mut hulls = Vec::new();
-        for (k, part) in parts.iter().enumerate() {
-            match hull_of(part) {
-                // A part too big for one hull is the user's to split, not a
-                // reason to put a hull round everything.
-                Err(e @ NoHull::Corners(_)) => {
-                    return Err(format!("part {} of {}: {e}", k + 1, parts.len()))
-                }
-                Ok(corners) if Hull::new(&corners).is_ok() => hulls.push(corners),
+        for part in &parts {
+            match mesh_hull(part) {
+                Ok(hull) if Hull::new(&hull.corners).is_ok() => hulls.push(hull),
                 // Flat (to the core too): the mesh is one hull, below.
                 _ => {}
             }
@@ -392,7 +410,21 @@ fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<Vec<[f32;
             return Ok(hulls);
         }
     }
-    Ok(vec![hull_of(&parts.concat()).map_err(|e| e.to_string())?])
+    Ok(vec![mesh_hull(&parts.concat()).map_err(|e| e.to_string())?])
+}
+
+/// What the notes say of a mesh part planned round an enclosure instead of
+/// its hull (`None` when it is its hull).
+fn enclosure_note(hull: &MeshHull, unit: &str) -> Option<String> {
+    let e = &hull.enclosure;
+    (!e.is_exact()).then(|| {
+        format!(
+            "its hull has {} corners, more than the {MAX_HULL_VERTICES} a hull may have: planned round an enclosing hull of {} corners, at most {:.3} {unit} outside the part",
+            e.hull_corners,
+            e.corners.len(),
+            e.overshoot
+        )
+    })
 }
 
 impl ObstacleSpec {
@@ -1078,6 +1110,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let mut obstacle_names = Vec::new();
     let mut obstacle_lines = Vec::new();
     let mut hulls: Vec<Vec<[f32; 3]>> = Vec::new();
+    // What the loader did that a user should know of (meshes enclosed).
+    let mut notes: Vec<String> = Vec::new();
     for spec in file.obstacles {
         let line = at(spec.span());
         let s = spec.into_inner();
@@ -1086,6 +1120,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             euler_123: s.euler.map(|x| (x * angle) as f32),
             shape,
         };
+        let mut enclosed: Vec<Option<String>> = Vec::new();
         let corners: Vec<Vec<[f32; 3]>> = match s.shape().map_err(|e| err(line, e))? {
             Given::Shape(shape) => {
                 obstacles.push(solid(shape));
@@ -1107,8 +1142,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                     .into_iter()
                     .map(|part| part.into_iter().map(|p| p.map(|x| x * scale)).collect())
                     .collect();
-                mesh_hulls(scaled, separate)
-                    .map_err(|e| err(line, format!("obstacle: mesh \"{file}\": {e}")))?
+                let hulls = mesh_hulls(scaled, separate)
+                    .map_err(|e| err(line, format!("obstacle: mesh \"{file}\": {e}")))?;
+                enclosed = hulls
+                    .iter()
+                    .map(|h| enclosure_note(h, length_unit))
+                    .collect();
+                hulls.into_iter().map(|h| h.corners).collect()
             }
         };
         if hulls.len() + corners.len() > MAX_HULLS {
@@ -1131,13 +1171,22 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             obstacles.push(solid(Shape::Convex {
                 hull: (hulls.len() - 1) as u8,
             }));
-            obstacle_names.push(if count > 1 {
+            let name = if count > 1 {
                 format!("{} part {}", s.name, k + 1)
                     .trim_start()
                     .to_string()
             } else {
                 s.name.clone()
-            });
+            };
+            if let Some(Some(note)) = enclosed.get(k) {
+                let who = if name.is_empty() {
+                    format!("obstacle {}", obstacles.len())
+                } else {
+                    format!("obstacle \"{name}\"")
+                };
+                notes.push(format!("{who} (line {line}): {note}"));
+            }
+            obstacle_names.push(name);
             obstacle_lines.push(Some(line));
         }
     }
@@ -1303,6 +1352,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     }
     Ok(Problem {
         joint_goals,
+        notes,
         name,
         description: file.description.trim().to_string(),
         source: path.to_path_buf(),

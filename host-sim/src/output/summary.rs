@@ -31,6 +31,8 @@ pub fn outcome_name(outcome: Outcome) -> &'static str {
 pub struct Summary {
     /// Scenario name.
     pub name: String,
+    /// The reader's notes ([`Problem::notes`]).
+    pub notes: Vec<String>,
     /// How it ended.
     pub outcome: Outcome,
     /// Steps taken.
@@ -455,6 +457,7 @@ impl Summary {
         }
         Summary {
             name: problem.name.clone(),
+            notes: problem.notes.clone(),
             outcome: result.outcome,
             steps: result.steps(),
             sim_time_s: result.rows.iter().map(|r| r.h as f64).sum(),
@@ -486,6 +489,9 @@ impl Summary {
 impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "scenario:          {}", self.name)?;
+        for note in &self.notes {
+            writeln!(f, "note:              {note}")?;
+        }
         writeln!(f, "outcome:           {}", outcome_name(self.outcome))?;
         writeln!(
             f,
