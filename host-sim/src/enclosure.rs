@@ -25,7 +25,7 @@
 //! enclosure with a corner budget is not what hull or decomposition crates
 //! give (they simplify inward, or by error bounds, not by corners).
 
-use crate::polytope::{cloud_hull, cross, dot, CloudHull, HullFailure, V3};
+use crate::polytope::{cloud_hull, cross, dot, spread, CloudHull, HullFailure, V3};
 
 /// How far each plane is pushed out beyond the cloud, relative to its size:
 /// the corners are rounded to `f32` for the core (a relative `6e-8`), and
@@ -73,7 +73,7 @@ pub fn enclose(points: &[V3], max_corners: usize) -> Result<Enclosure, HullFailu
             overshoot: 0.0,
         });
     }
-    let size = extent(&hull.corners);
+    let size = spread(&hull.corners);
     let max_planes = (max_corners.max(8) + 4) / 2;
     // The cloud's support along `n` (every point, not just the hull's
     // triangles: the hull leaves points within 1e-7 of its size outside).
@@ -176,20 +176,6 @@ fn meet(a: (V3, f64), b: (V3, f64), c: (V3, f64)) -> Option<V3> {
         return None;
     }
     Some([0, 1, 2].map(|i| (a.1 * bc[i] + b.1 * ca[i] + c.1 * ab[i]) / det))
-}
-
-/// The largest extent of `points` along an axis, length units.
-fn extent(points: &[V3]) -> f64 {
-    (0..3)
-        .map(|a| {
-            let (lo, hi) = points
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                    (lo.min(p[a]), hi.max(p[a]))
-                });
-            hi - lo
-        })
-        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]

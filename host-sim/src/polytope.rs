@@ -77,7 +77,7 @@ fn scaled(a: V3, s: f64) -> V3 {
 }
 
 /// The largest extent of `points` along an axis, length units.
-fn spread(points: &[V3]) -> f64 {
+pub(crate) fn spread(points: &[V3]) -> f64 {
     (0..3)
         .map(|a| {
             let (lo, hi) = points
