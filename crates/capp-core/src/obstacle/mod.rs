@@ -41,11 +41,14 @@
 //! potential (eq. 26), the projection and the engage threshold treat a
 //! primitive as they treat the exponent-2 super-ellipsoid of its size. The
 //! gradient is `2 (d + rho) / (m + rho)^2 grad d`, exact; the distance bound
-//! is the distance itself, `d - m`, except for a sphere, whose pair runs
-//! without a square root and takes the super-ellipsoid's convex bound
-//! `(C - 1) / |grad C|` (at least half the distance, equal on the inflated
-//! surface). Points farther than the influence distance from the inflated
-//! surface are out of influence.
+//! is the distance itself, `d - m`, and points farther than the influence
+//! distance from the inflated surface are out of influence. A sphere is
+//! that ellipsoid to the bit (the same `C`, gradient, influence box and
+//! distance bound: the larger of the convex bound `(C - 1) / |grad C|`, at
+//! least half the distance and equal to it on the inflated surface, and
+//! the distance to the inflated cube): its pair is the super-ellipsoid's,
+//! with no square root and no call (0.9x an exponent-8 super-ellipsoid's
+//! on the M4F; the primitives' own pair, out of line, cost 1.02x).
 
 use crate::math::{max, rotation_123, vec3, Mat3, Vec3};
 
@@ -333,7 +336,8 @@ pub struct Contact {
 /// straight through (one dispatch a pair, not one an axis) and the general case.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Powers {
-    /// Exponent 2 on every axis (an ellipsoid).
+    /// Exponent 2 on every axis (an ellipsoid; a sphere too, see
+    /// [`Obstacle::new_in`]).
     Same2,
     /// Exponent 4 on every axis.
     Same4,
@@ -682,6 +686,13 @@ impl Obstacle {
             aligned,
             powers: match (primitive, s.shape) {
                 (Some(Primitive::Cuboid { .. }), _) => Powers::Cuboid,
+                // A sphere of radius `r` is the ellipsoid of semi-axes `r`:
+                // `C` rebuilt on its distance, `((d + r) / (m + r))^2 = |x|^2
+                // / (m + r)^2`, is the ellipsoid's (its `inv` is `1 / (r +
+                // m)` on every axis), so it takes the super-ellipsoid's pair
+                // code, inline, with its influence box (a cube round the
+                // ball of radius `r + m + influence`) and its distance bound.
+                (Some(Primitive::Sphere { .. }), _) => Powers::Same2,
                 (Some(_), _) => Powers::Primitive,
                 (None, Shape::Convex { .. }) => Powers::Hull,
                 (None, _) => Powers::new(exponents),
@@ -946,7 +957,6 @@ impl Obstacle {
     #[inline(never)]
     fn primitive_pair(&self, primitive: &Primitive, inflated: &Inflated, x: &Vec3) -> Pair {
         let (clearance, local_gradient, gap) = match *primitive {
-            Primitive::Sphere { .. } => return self.sphere_pair(x, inflated),
             // Round about a segment: `d + rho = |v|` (`rho` the radius), so
             // `C = |v|^2 / (m + rho)^2` and `grad C = 2 v / (m + rho)^2`, no
             // division; the root only for the distance.
@@ -1008,27 +1018,6 @@ impl Obstacle {
         let d = hull.distance(x);
         let (clearance, gradient) = self.rebuilt(d.distance, &d.normal, inflated);
         self.primitive_tail(clearance, gradient, d.lower_bound - inflated.margin)
-    }
-
-    /// [`Obstacle::pair`] for a sphere, inline and without a root or a
-    /// call (`rho` is the radius `r`, so `C = |x|^2 / (m + r)^2`, exactly
-    /// the ellipsoid's): the influence test on `|x|^2`, and for the
-    /// distance the convex bound `(C - 1)^2 / |grad C|^2` a super-ellipsoid
-    /// uses, which is below the true distance `|x| - r - m` by the factor
-    /// `(|x| + r + m) / (2 |x|)` (1 on the inflated surface, at least 1/2).
-    #[inline(always)]
-    fn sphere_pair(&self, x: &Vec3, inflated: &Inflated) -> Pair {
-        let length_sq = x.dot(x);
-        let outer = self.inradius + inflated.margin + self.influence;
-        #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        if !(length_sq <= outer * outer) {
-            return Pair::Far;
-        }
-        let inv_sq = inflated.inv_scale * inflated.inv_scale;
-        let clearance = length_sq * inv_sq - 1.0;
-        by_clearance(clearance, x * (2.0 * inv_sq), || {
-            clearance * clearance / (4.0 * inv_sq * inv_sq * length_sq)
-        })
     }
 
     /// The cases of [`Pair`] from a primitive's `C - 1`, `grad C` (local
@@ -1548,7 +1537,9 @@ mod tests {
     #[test]
     fn a_sphere_is_the_exponent_2_super_ellipsoid_of_its_size() {
         // The potential treats a primitive as it treats the ellipsoid: for
-        // a sphere the rebuilt C is the super-ellipsoid's own.
+        // a sphere the rebuilt C is the super-ellipsoid's own, and its pair
+        // (C, gradient, influence and distance bound) is the ellipsoid's to
+        // the bit, turned or not, near and far.
         let mut rng = 29u64;
         let sphere = Obstacle::new(
             0,
@@ -1572,6 +1563,34 @@ mod tests {
                     ellipsoid.clearance_uncut(&p, kind, &[]),
                 );
                 assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{p:?}: {a} {b}");
+                assert_eq!(
+                    sphere.contact(&p, kind, &[]),
+                    ellipsoid.contact(&p, kind, &[]),
+                    "{p:?}"
+                );
+            }
+        }
+        // Turned: a sphere skips its rotation (it is the same turned any
+        // way), so a turned sphere's pair is the aligned ellipsoid's too.
+        let turned = Obstacle::new(
+            0,
+            &Solid {
+                centre: [1.0, 2.0, 3.0],
+                euler_123: [0.3, -0.5, 0.9],
+                shape: Shape::Sphere { radius: 2.0 },
+            },
+            [0.5, 0.25],
+            10.0,
+        )
+        .unwrap();
+        for _ in 0..200 {
+            let p = sphere.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 20.0;
+            for kind in [PointKind::Joint, PointKind::Link] {
+                assert_eq!(
+                    turned.contact(&p, kind, &[]),
+                    ellipsoid.contact(&p, kind, &[]),
+                    "{p:?}"
+                );
             }
         }
     }
