@@ -21,11 +21,22 @@
 //! candidates, so a part with few large faces (a box with fillets, a
 //! bracket) keeps them exactly.
 //!
+//! A round part (a ball, a fillet all round) has many faces that few planes
+//! fit badly (18 planes round a ball leave corners a quarter of its radius
+//! out). So a second enclosure is made too and the tighter kept: `k` of the
+//! hull's corners spread over it (each next the corner farthest from those
+//! taken), their hull grown about its centroid just enough to hold every
+//! corner of the part's (round a ball, a sixth of its radius). Both are
+//! measured the same way: the largest distance of a corner from the hull,
+//! the farthest any point of the enclosure is from the part (the distance
+//! to a convex set is convex, so its largest over a polytope is at a
+//! corner).
+//!
 //! Written here rather than taken from a crate: a tight, conservative
 //! enclosure with a corner budget is not what hull or decomposition crates
 //! give (they simplify inward, or by error bounds, not by corners).
 
-use crate::polytope::{cloud_hull, cross, dot, spread, CloudHull, HullFailure, V3};
+use crate::polytope::{cloud_hull, cross, dot, spread, sub, CloudHull, HullFailure, V3};
 
 /// How far each plane is pushed out beyond the cloud, relative to its size:
 /// the corners are rounded to `f32` for the core (a relative `6e-8`), and
@@ -60,9 +71,9 @@ impl Enclosure {
     }
 }
 
-/// The cloud's hull when it has at most `max_corners` corners, else an
-/// enclosure of at most `max_corners` (at least 8) made as the module docs
-/// say.
+/// The cloud's hull when it has at most `max_corners` corners, else the
+/// tighter of the two enclosures of at most `max_corners` (at least 8) the
+/// module docs describe.
 pub fn enclose(points: &[V3], max_corners: usize) -> Result<Enclosure, HullFailure> {
     let hull = cloud_hull(points)?;
     let hull_corners = hull.corners.len();
@@ -74,7 +85,29 @@ pub fn enclose(points: &[V3], max_corners: usize) -> Result<Enclosure, HullFailu
         });
     }
     let size = spread(&hull.corners);
-    let max_planes = (max_corners.max(8) + 4) / 2;
+    let measured = |corners: Vec<V3>| {
+        let overshoot = corners
+            .iter()
+            .map(|&c| hull.distance(c))
+            .fold(0.0, f64::max);
+        Enclosure {
+            corners,
+            hull_corners,
+            overshoot,
+        }
+    };
+    let cut = measured(by_planes(points, &hull, size, max_corners.max(8)));
+    let grown = scaled_corners(&hull, size, max_corners.max(8)).map(measured);
+    Ok(match grown {
+        Some(grown) if grown.overshoot < cut.overshoot => grown,
+        _ => cut,
+    })
+}
+
+/// The intersection of at most `(max_corners + 4) / 2` supporting planes
+/// of `points` (module docs): its corners.
+fn by_planes(points: &[V3], hull: &CloudHull, size: f64, max_corners: usize) -> Vec<V3> {
+    let max_planes = (max_corners + 4) / 2;
     // The cloud's support along `n` (every point, not just the hull's
     // triangles: the hull leaves points within 1e-7 of its size outside).
     let support = |n: V3| points.iter().map(|&p| dot(n, p)).fold(f64::MIN, f64::max);
@@ -90,7 +123,7 @@ pub fn enclose(points: &[V3], max_corners: usize) -> Result<Enclosure, HullFailu
         let corners = intersect(&planes, size);
         let worst = corners
             .iter()
-            .filter_map(|&c| farthest_plane(&hull, c))
+            .filter_map(|&c| farthest_plane(hull, c))
             .fold(None, |best: Option<(f64, usize)>, (excess, t)| match best {
                 Some((b, _)) if b >= excess => best,
                 _ => Some((excess, t)),
@@ -113,15 +146,71 @@ pub fn enclose(points: &[V3], max_corners: usize) -> Result<Enclosure, HullFailu
         planes.pop();
         corners = intersect(&planes, size);
     }
-    let overshoot = corners
-        .iter()
-        .map(|&c| hull.distance(c))
-        .fold(0.0, f64::max);
-    Ok(Enclosure {
-        corners,
-        hull_corners,
-        overshoot,
-    })
+    corners
+}
+
+/// `max_corners` of the hull's corners spread over it (each next the one
+/// farthest from those taken), their hull grown about its centroid until
+/// it holds every corner of the cloud's (`None` when they span no
+/// volume): the enclosure a round part gets, whose many faces a few
+/// planes fit badly.
+fn scaled_corners(hull: &CloudHull, size: f64, max_corners: usize) -> Option<Vec<V3>> {
+    let corners = &hull.corners;
+    let first = corners.first().copied()?;
+    let mut taken = vec![first];
+    let mut nearest: Vec<f64> = corners.iter().map(|&c| distance_sq(c, first)).collect();
+    while taken.len() < max_corners {
+        let (far, _) = nearest
+            .iter()
+            .enumerate()
+            .fold((0, f64::NEG_INFINITY), |best, (i, &d)| {
+                if d > best.1 {
+                    (i, d)
+                } else {
+                    best
+                }
+            });
+        let pick = corners[far];
+        taken.push(pick);
+        for (d, &c) in nearest.iter_mut().zip(corners) {
+            *d = d.min(distance_sq(c, pick));
+        }
+    }
+    let inner = cloud_hull(&taken).ok()?;
+    let n = taken.len() as f64;
+    let centre = [0, 1, 2].map(|a| taken.iter().map(|p| p[a]).sum::<f64>() / n);
+    // The least scale about the centre with every corner of the cloud's
+    // hull behind every (scaled) face plane, plus the slack.
+    let mut scale = 1.0f64;
+    for t in &inner.triangles {
+        let depth = t.offset - dot(t.normal, centre);
+        if depth <= 0.0 {
+            return None;
+        }
+        for &c in corners {
+            scale = scale.max(dot(t.normal, sub(c, centre)) / depth);
+        }
+    }
+    let grow = scale
+        + SLACK * size
+            / inner
+                .triangles
+                .iter()
+                .map(|t| t.offset - dot(t.normal, centre))
+                .fold(f64::INFINITY, f64::min);
+    Some(
+        inner
+            .corners
+            .iter()
+            .map(|&p| [0, 1, 2].map(|a| centre[a] + grow * (p[a] - centre[a])))
+            .collect(),
+    )
+}
+
+/// `|a - b|^2`.
+fn distance_sq(a: V3, b: V3) -> f64 {
+    let d = sub(a, b);
+    dot(d, d)
 }
 
 /// The hull face plane `corner` is farthest beyond, and by how much
@@ -283,7 +372,22 @@ mod tests {
                     ]
                 })
                 .collect();
+            let hull = cloud_hull(&points).unwrap();
+            let size = spread(&hull.corners);
             for budget in [8, 16, 32] {
+                // Both candidates hold the cloud within the budget; the
+                // enclosure is the tighter.
+                let planes = by_planes(&points, &hull, size, budget);
+                assert!(
+                    planes.len() <= budget && holds(&planes, &points),
+                    "case {case}"
+                );
+                if let Some(grown) = scaled_corners(&hull, size, budget) {
+                    assert!(
+                        grown.len() <= budget && holds(&grown, &points),
+                        "case {case}"
+                    );
+                }
                 let e = enclose(&points, budget).unwrap();
                 assert!(
                     e.corners.len() <= budget,
@@ -347,5 +451,40 @@ mod tests {
             "{}",
             e.overshoot
         );
+    }
+
+    #[test]
+    fn a_round_part_is_grown_from_its_corners_not_cut_by_planes() {
+        // A ball of radius 10 tessellated finely (every point a corner):
+        // 18 planes round a ball leave corners about a quarter of its
+        // radius out (2.5), 32 of its own corners grown to hold it less
+        // (1.6).
+        let mut points = Vec::new();
+        for j in 1..40 {
+            let polar = std::f64::consts::PI * j as f64 / 40.0;
+            for i in 0..80 {
+                let azimuth = std::f64::consts::TAU * i as f64 / 80.0;
+                points.push([
+                    10.0 * polar.sin() * azimuth.cos(),
+                    10.0 * polar.sin() * azimuth.sin(),
+                    10.0 * polar.cos(),
+                ]);
+            }
+        }
+        points.extend([[0.0, 0.0, 10.0], [0.0, 0.0, -10.0]]);
+        let hull = cloud_hull(&points).unwrap();
+        let size = spread(&hull.corners);
+        let overshoot = |corners: &[V3]| {
+            corners
+                .iter()
+                .map(|&c| hull.distance(c))
+                .fold(0.0, f64::max)
+        };
+        let cut = overshoot(&by_planes(&points, &hull, size, 32));
+        let e = enclose(&points, 32).unwrap();
+        assert!(holds(&e.corners, &points));
+        assert!(e.corners.len() <= 32);
+        assert!(e.overshoot < 0.7 * cut, "{} against {cut}", e.overshoot);
+        assert!(e.overshoot < 2.0, "{}", e.overshoot);
     }
 }
