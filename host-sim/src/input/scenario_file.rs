@@ -16,11 +16,11 @@ use std::path::Path;
 use capp_core::control::LawKind;
 use capp_core::math::rotation_123;
 use capp_core::obstacle::{Hull, MAX_HULLS, MAX_HULL_VERTICES};
-
-use crate::enclosure::{enclose, Enclosure};
 use capp_core::{
     pips, Joint, JointKind, Motion, Robot, SetpointFilter, Settings, Shape, Solid, Waypoint,
 };
+
+use crate::enclosure::{enclose, Enclosure};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -252,7 +252,7 @@ impl std::fmt::Display for NoHull {
             NoHull::Points(e) => write!(f, "{e}"),
             NoHull::Corners(n) => write!(
                 f,
-                "its hull has {n} vertices, more than the {MAX_HULL_VERTICES} a hull may have (split the part into convex pieces or simplify it)"
+                "its hull has {n} vertices, more than the {MAX_HULL_VERTICES} a hull may have (give fewer, or the part as a `mesh`: a mesh is enclosed in {MAX_HULL_VERTICES})"
             ),
         }
     }
@@ -419,7 +419,7 @@ fn enclosure_note(hull: &MeshHull, unit: &str) -> Option<String> {
     let e = &hull.enclosure;
     (!e.is_exact()).then(|| {
         format!(
-            "its hull has {} corners, more than the {MAX_HULL_VERTICES} a hull may have: planned round an enclosing hull of {} corners, at most {:.3} {unit} outside the part",
+            "its hull has {} corners, more than the {MAX_HULL_VERTICES} a hull may have: planned round an enclosing hull of {} corners, at most {:.3} {unit} beyond the part's own hull",
             e.hull_corners,
             e.corners.len(),
             e.overshoot
