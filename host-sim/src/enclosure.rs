@@ -121,13 +121,7 @@ fn by_planes(points: &[V3], hull: &CloudHull, size: f64, max_corners: usize) -> 
     }
     while planes.len() < max_planes {
         let corners = intersect(&planes, size);
-        let worst = corners
-            .iter()
-            .filter_map(|&c| farthest_plane(hull, c))
-            .fold(None, |best: Option<(f64, usize)>, (excess, t)| match best {
-                Some((b, _)) if b >= excess => best,
-                _ => Some((excess, t)),
-            });
+        let worst = first_largest(corners.iter().filter_map(|&c| farthest_plane(hull, c)));
         match worst {
             Some((excess, t)) if excess > ON_HULL * size => {
                 let n = hull.triangles[t].normal;
@@ -160,16 +154,9 @@ fn scaled_corners(hull: &CloudHull, size: f64, max_corners: usize) -> Option<Vec
     let mut taken = vec![first];
     let mut nearest: Vec<f64> = corners.iter().map(|&c| distance_sq(c, first)).collect();
     while taken.len() < max_corners {
-        let (far, _) = nearest
-            .iter()
-            .enumerate()
-            .fold((0, f64::NEG_INFINITY), |best, (i, &d)| {
-                if d > best.1 {
-                    (i, d)
-                } else {
-                    best
-                }
-            });
+        let Some((_, far)) = first_largest(nearest.iter().copied().zip(0..)) else {
+            break;
+        };
         let pick = corners[far];
         taken.push(pick);
         for (d, &c) in nearest.iter_mut().zip(corners) {
@@ -180,24 +167,20 @@ fn scaled_corners(hull: &CloudHull, size: f64, max_corners: usize) -> Option<Vec
     let n = taken.len() as f64;
     let centre = [0, 1, 2].map(|a| taken.iter().map(|p| p[a]).sum::<f64>() / n);
     // The least scale about the centre with every corner of the cloud's
-    // hull behind every (scaled) face plane, plus the slack.
-    let mut scale = 1.0f64;
+    // hull behind every (scaled) face plane, plus the slack: every plane
+    // at least `SLACK * size` farther out (the shallowest moves least).
+    let (mut scale, mut shallowest) = (1.0f64, f64::INFINITY);
     for t in &inner.triangles {
         let depth = t.offset - dot(t.normal, centre);
         if depth <= 0.0 {
             return None;
         }
+        shallowest = shallowest.min(depth);
         for &c in corners {
             scale = scale.max(dot(t.normal, sub(c, centre)) / depth);
         }
     }
-    let grow = scale
-        + SLACK * size
-            / inner
-                .triangles
-                .iter()
-                .map(|t| t.offset - dot(t.normal, centre))
-                .fold(f64::INFINITY, f64::min);
+    let grow = scale + SLACK * size / shallowest;
     Some(
         inner
             .corners
@@ -216,15 +199,19 @@ fn distance_sq(a: V3, b: V3) -> f64 {
 /// The hull face plane `corner` is farthest beyond, and by how much
 /// (`None`: behind every plane).
 fn farthest_plane(hull: &CloudHull, corner: V3) -> Option<(f64, usize)> {
-    hull.triangles
-        .iter()
-        .enumerate()
-        .map(|(t, tri)| (dot(tri.normal, corner) - tri.offset, t))
-        .filter(|&(excess, _)| excess > 0.0)
-        .fold(None, |best: Option<(f64, usize)>, (excess, t)| match best {
-            Some((b, _)) if b >= excess => best,
-            _ => Some((excess, t)),
-        })
+    first_largest(
+        hull.triangles
+            .iter()
+            .zip(0..)
+            .map(|(tri, t)| (dot(tri.normal, corner) - tri.offset, t))
+            .filter(|&(excess, _)| excess > 0.0),
+    )
+}
+
+/// The first of the `(value, index)` pairs with the largest value (`None`
+/// for none).
+fn first_largest(pairs: impl Iterator<Item = (f64, usize)>) -> Option<(f64, usize)> {
+    pairs.min_by(|a, b| b.0.total_cmp(&a.0))
 }
 
 /// The corners of the intersection of the half-spaces `n . x <= offset`
@@ -243,10 +230,7 @@ fn intersect(planes: &[(V3, f64)], size: f64) -> Vec<V3> {
                 let inside = planes
                     .iter()
                     .all(|&(n, offset)| dot(n, x) <= offset + merge * 10.0);
-                let known = corners.iter().any(|&c| {
-                    let d = [c[0] - x[0], c[1] - x[1], c[2] - x[2]];
-                    dot(d, d) <= merge * merge
-                });
+                let known = corners.iter().any(|&c| distance_sq(c, x) <= merge * merge);
                 if inside && !known {
                     corners.push(x);
                 }

@@ -176,9 +176,7 @@ impl CloudHull {
             .iter()
             .filter(|t| dot(t.normal, x) > t.offset)
             .map(|t| triangle_distance(x, t.corners))
-            .fold(None, |least: Option<f64>, d| {
-                Some(least.map_or(d, |l| l.min(d)))
-            })
+            .reduce(f64::min)
             .unwrap_or(0.0)
     }
 }

@@ -265,7 +265,12 @@ fn hull_of(points: &[[f64; 3]]) -> Result<Vec<[f32; 3]>, NoHull> {
     if corners.len() > MAX_HULL_VERTICES {
         return Err(NoHull::Corners(corners.len()));
     }
-    Ok(corners.iter().map(|v| v.map(|x| x as f32)).collect())
+    Ok(as_f32(&corners))
+}
+
+/// Corners in `f32`, as the core takes them.
+fn as_f32(corners: &[[f64; 3]]) -> Vec<[f32; 3]> {
+    corners.iter().map(|v| v.map(|x| x as f32)).collect()
 }
 
 /// The separate parts of mesh file `file` (STL, binary or ASCII, or OBJ),
@@ -373,35 +378,21 @@ fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3
 
 /// A mesh part's hull as the core takes it: its convex hull, or, when that
 /// has more than [`MAX_HULL_VERTICES`] corners (a curved CAD part), an
-/// enclosure of at most that many ([`crate::enclosure`]), with what it is.
-struct MeshHull {
-    corners: Vec<[f32; 3]>,
-    enclosure: Enclosure,
-}
-
-/// [`MeshHull`] of `points` (obstacle frame, length units), or why not.
-fn mesh_hull(points: &[[f64; 3]]) -> Result<MeshHull, NoHull> {
-    let enclosure = enclose(points, MAX_HULL_VERTICES).map_err(NoHull::Points)?;
-    Ok(MeshHull {
-        corners: enclosure
-            .corners
-            .iter()
-            .map(|v| v.map(|x| x as f32))
-            .collect(),
-        enclosure,
-    })
+/// enclosure of at most that many ([`crate::enclosure`]).
+fn mesh_hull(points: &[[f64; 3]]) -> Result<Enclosure, NoHull> {
+    enclose(points, MAX_HULL_VERTICES).map_err(NoHull::Points)
 }
 
 /// The hulls of a mesh's `parts` (already scaled): one per part when
 /// `separate` and every part spans a volume of its own (a closed part), or
 /// else one round them all (an open surface, such as a mesh of loose
 /// faces, has flat parts: then the mesh is one hull, as a mesh always was).
-fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<MeshHull>, String> {
+fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<Enclosure>, String> {
     if separate && parts.len() > 1 {
         let mut hulls = Vec::new();
         for part in &parts {
             match mesh_hull(part) {
-                Ok(hull) if Hull::new(&hull.corners).is_ok() => hulls.push(hull),
+                Ok(hull) if Hull::new(&as_f32(&hull.corners)).is_ok() => hulls.push(hull),
                 // Flat (to the core too): the mesh is one hull, below.
                 _ => {}
             }
@@ -415,8 +406,7 @@ fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<MeshHull>
 
 /// What the notes say of a mesh part planned round an enclosure instead of
 /// its hull (`None` when it is its hull).
-fn enclosure_note(hull: &MeshHull, unit: &str) -> Option<String> {
-    let e = &hull.enclosure;
+fn enclosure_note(e: &Enclosure, unit: &str) -> Option<String> {
     (!e.is_exact()).then(|| {
         format!(
             "its hull has {} corners, more than the {MAX_HULL_VERTICES} a hull may have: planned round an enclosing hull of {} corners, at most {:.3} {unit} beyond the part's own hull",
@@ -1148,7 +1138,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                     .iter()
                     .map(|h| enclosure_note(h, length_unit))
                     .collect();
-                hulls.into_iter().map(|h| h.corners).collect()
+                hulls.iter().map(|h| as_f32(&h.corners)).collect()
             }
         };
         if hulls.len() + corners.len() > MAX_HULLS {

@@ -1541,13 +1541,18 @@ mod tests {
         // (C, gradient, influence and distance bound) is the ellipsoid's to
         // the bit, turned or not, near and far.
         let mut rng = 29u64;
-        let sphere = Obstacle::new(
-            0,
-            &Solid::aligned([1.0, 2.0, 3.0], Shape::Sphere { radius: 2.0 }),
-            [0.5, 0.25],
-            10.0,
-        )
-        .unwrap();
+        // Aligned, and turned: a sphere skips its rotation (it is the same
+        // turned any way), so a turned sphere's pair is the aligned
+        // ellipsoid's too.
+        let sphere = |euler_123| {
+            let solid = Solid {
+                centre: [1.0, 2.0, 3.0],
+                euler_123,
+                shape: Shape::Sphere { radius: 2.0 },
+            };
+            Obstacle::new(0, &solid, [0.5, 0.25], 10.0).unwrap()
+        };
+        let spheres = [sphere([0.0; 3]), sphere([0.3, -0.5, 0.9])];
         let ellipsoid = Obstacle::new(
             0,
             &SuperEllipsoid::aligned([1.0, 2.0, 3.0], [2.0; 3], 2.0),
@@ -1555,42 +1560,21 @@ mod tests {
             10.0,
         )
         .unwrap();
-        for _ in 0..200 {
-            let p = sphere.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 6.0;
-            for kind in [PointKind::Joint, PointKind::Link] {
-                let (a, b) = (
-                    sphere.clearance_uncut(&p, kind, &[]),
-                    ellipsoid.clearance_uncut(&p, kind, &[]),
-                );
-                assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{p:?}: {a} {b}");
-                assert_eq!(
-                    sphere.contact(&p, kind, &[]),
-                    ellipsoid.contact(&p, kind, &[]),
-                    "{p:?}"
-                );
-            }
-        }
-        // Turned: a sphere skips its rotation (it is the same turned any
-        // way), so a turned sphere's pair is the aligned ellipsoid's too.
-        let turned = Obstacle::new(
-            0,
-            &Solid {
-                centre: [1.0, 2.0, 3.0],
-                euler_123: [0.3, -0.5, 0.9],
-                shape: Shape::Sphere { radius: 2.0 },
-            },
-            [0.5, 0.25],
-            10.0,
-        )
-        .unwrap();
-        for _ in 0..200 {
-            let p = sphere.centre() + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * 20.0;
-            for kind in [PointKind::Joint, PointKind::Link] {
-                assert_eq!(
-                    turned.contact(&p, kind, &[]),
-                    ellipsoid.contact(&p, kind, &[]),
-                    "{p:?}"
-                );
+        // Within 6 of the centre (near: inside, on and just off the
+        // surface), then within 20 (far: beyond the influence too).
+        for reach in [6.0, 20.0] {
+            for _ in 0..200 {
+                let p = ellipsoid.centre()
+                    + vec3([lcg(&mut rng), lcg(&mut rng), lcg(&mut rng)]) * reach;
+                for kind in [PointKind::Joint, PointKind::Link] {
+                    let expected = ellipsoid.contact(&p, kind, &[]);
+                    let b = ellipsoid.clearance_uncut(&p, kind, &[]);
+                    for sphere in &spheres {
+                        let a = sphere.clearance_uncut(&p, kind, &[]);
+                        assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{p:?}: {a} {b}");
+                        assert_eq!(sphere.contact(&p, kind, &[]), expected, "{p:?}");
+                    }
+                }
             }
         }
     }
