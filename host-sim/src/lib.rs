@@ -38,6 +38,7 @@ pub mod enclosure;
 pub mod escapes;
 pub mod geometry;
 pub mod input;
+pub mod mesh_parts;
 pub mod output;
 pub mod plan;
 pub mod polytope;

@@ -1,6 +1,6 @@
 //! Convex hull obstacles in scenario files (`shape = "convex"` with
 //! `vertices`, `shape = "mesh"` with an STL or OBJ file): each loads as its
-//! hull's corners (a mesh of separate parts as a hull per part), the checker's exact f64 distance agrees with the core's
+//! hull's corners (a mesh of separate parts as a solid per part: a box where the part is one, hulls shared by neighbouring parts beyond the hull slots), the checker's exact f64 distance agrees with the core's
 //! GJK and with `shape = "box"`, every bad hull gets a one-line error naming
 //! the file and the obstacle's line (exit 2, no output folder), and a hull
 //! scenario plans end to end with the checker accepting it.
@@ -131,6 +131,46 @@ fn corners(h: [f32; 3]) -> Vec<[f32; 3]> {
     )
 }
 
+/// A box of half-extents `h` with its top (`+z`) face shrunk to 0.8 of it
+/// in x and y: 8 corners, 6 flat faces, not a box (a hull, not a box).
+fn frustum_triangles(h: [f32; 3]) -> Vec<[[f32; 3]; 3]> {
+    box_triangles(h)
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                if v[2] > 0.0 {
+                    [0.8 * v[0], 0.8 * v[1], v[2]]
+                } else {
+                    v
+                }
+            })
+        })
+        .collect()
+}
+
+/// The signed distance of world point `x` from obstacle `k` of `p`, by the
+/// checker's f64 geometry.
+fn world_distance(p: &Problem, k: usize, x: [f64; 3]) -> f64 {
+    let o = &p.obstacles[k];
+    let r = capp_sim::geometry::rotation(o.euler_123.map(f64::from));
+    let local = to_local(o.centre.map(f64::from), &r, x);
+    signed_distance(&o.shape, &hull_polytopes(p), local)
+}
+
+/// The half-extents of obstacle `k` of `p`, which must be a box.
+fn half_extents(p: &Problem, k: usize) -> [f32; 3] {
+    match p.obstacles[k].shape {
+        Shape::Cuboid { half_extents } => half_extents,
+        other => panic!("obstacle {k} is not a box: {other:?}"),
+    }
+}
+
+/// Whether `a` is `b` to within `1e-6` of `b`'s size, per component.
+fn close(a: [f32; 3], b: [f32; 3]) -> bool {
+    let size = b.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    (0..3).all(|k| a[k] >= b[k] && a[k] - b[k] <= 1e-6 * size.max(1.0))
+}
+
 #[test]
 fn convex_vertices_load_as_their_hulls_corners() {
     // A box's corners, one repeated, plus its centre and a face centre:
@@ -153,7 +193,7 @@ fn convex_vertices_load_as_their_hulls_corners() {
 }
 
 #[test]
-fn meshes_load_as_their_convex_hulls_binary_ascii_stl_and_obj() {
+fn meshes_load_binary_ascii_stl_and_obj_a_box_as_a_box_the_rest_as_hulls() {
     let dir = tempfile::tempdir().unwrap();
     let h = [0.1f32, 0.05, 0.2];
     let triangles = box_triangles(h);
@@ -182,25 +222,34 @@ fn meshes_load_as_their_convex_hulls_binary_ascii_stl_and_obj() {
     }
     obj.push_str("f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 6\nf 7 9 8\nf 7 10 9\nf 7 11 10\nf 7 12 11\n");
     write(dir.path(), "bracket.obj", &obj);
+    // Eight corners, but not a box.
+    let frustum = frustum_triangles(h);
+    std::fs::write(dir.path().join("frustum.stl"), binary_stl(&frustum)).unwrap();
     let p = load_in(
         dir.path(),
-        "\n[[obstacles]]\nname = \"binary\"\nshape = \"mesh\"\nmesh = \"part.stl\"\ncentre = [1.0, 0.5, 0.0]\n\n[[obstacles]]\nname = \"ascii\"\nshape = \"mesh\"\nmesh = \"cad/part_ascii.stl\"\nscale = 0.001\ncentre = [-1.0, 0.5, 0.0]\neuler = [10.0, 20.0, 30.0]\n\n[[obstacles]]\nname = \"bracket\"\nshape = \"mesh\"\nmesh = \"bracket.obj\"\ncentre = [0.0, -1.0, 0.0]\n",
+        "\n[[obstacles]]\nname = \"binary\"\nshape = \"mesh\"\nmesh = \"part.stl\"\ncentre = [1.0, 0.5, 0.0]\n\n[[obstacles]]\nname = \"ascii\"\nshape = \"mesh\"\nmesh = \"cad/part_ascii.stl\"\nscale = 0.001\ncentre = [-1.0, 0.5, 0.0]\neuler = [10.0, 20.0, 30.0]\n\n[[obstacles]]\nname = \"bracket\"\nshape = \"mesh\"\nmesh = \"bracket.obj\"\ncentre = [0.0, -1.0, 0.0]\n\n[[obstacles]]\nname = \"frustum\"\nshape = \"mesh\"\nmesh = \"frustum.stl\"\ncentre = [0.0, 1.0, 0.0]\n",
     )
     .unwrap();
+    // The boxes are boxes where the files put them (along the mesh's axes:
+    // the mesh's own placement), a hair larger at most; no hull slot.
+    assert!(close(half_extents(&p, 0), h), "{:?}", p.obstacles[0]);
+    assert_eq!(p.obstacles[0].centre, [1.0, 0.5, 0.0]);
+    assert_eq!(p.obstacles[0].euler_123, [0.0; 3]);
+    assert!(close(half_extents(&p, 1), h), "{:?}", p.obstacles[1]);
+    let turned = [10f64, 20.0, 30.0].map(|a| a.to_radians() as f32);
+    assert_eq!(p.obstacles[1].euler_123, turned);
+    assert!((0..3).all(|k| (p.obstacles[1].centre[k] - [-1.0, 0.5, 0.0][k]).abs() < 1e-6));
     assert_eq!(
-        p.obstacles.iter().map(|o| o.shape).collect::<Vec<_>>(),
-        (0..3)
-            .map(|hull| Shape::Convex { hull })
-            .collect::<Vec<_>>()
+        [2, 3].map(|k| p.obstacles[k].shape),
+        [Shape::Convex { hull: 0 }, Shape::Convex { hull: 1 }]
     );
-    assert_eq!(sorted(p.hulls[0].clone()), corners(h));
-    let scaled = sorted(p.hulls[1].clone());
-    for (a, b) in scaled.iter().zip(corners(h)) {
-        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6), "{a:?} {b:?}");
-    }
     // The L's inner corner (0.05, 0.05) is not on its hull: 5 of 6 per end.
-    assert_eq!(p.hulls[2].len(), 10);
-    assert!(!p.hulls[2].iter().any(|v| v[0] == 0.05 && v[1] == 0.05));
+    assert_eq!(p.hulls[0].len(), 10);
+    assert!(!p.hulls[0].iter().any(|v| v[0] == 0.05 && v[1] == 0.05));
+    let mut frustum_corners: Vec<[f32; 3]> = frustum.iter().flatten().copied().collect();
+    frustum_corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    frustum_corners.dedup();
+    assert_eq!(sorted(p.hulls[1].clone()), frustum_corners);
     p.scenario().unwrap();
 }
 
@@ -515,18 +564,22 @@ fn write_legs(dir: &Path) {
 }
 
 #[test]
-fn a_mesh_of_separate_parts_is_a_hull_per_part() {
+fn a_mesh_of_separate_parts_is_a_solid_per_part() {
     // Two boxes 0.3 apart in one binary STL (a table's two legs, say): a
-    // hull each, not one round both, so the gap between them stays free;
-    // `parts = "one"` asks for the single hull.
+    // box each, not one round both, so the gap between them stays free;
+    // `parts = "one"` asks for the single solid round both (a box too).
     let dir = tempfile::tempdir().unwrap();
     write_legs(dir.path());
     // Two OBJ objects touching along a face (their shared corners written
-    // twice, as a convex decomposition writes its pieces): a hull each.
+    // twice, as a convex decomposition writes its pieces), neither a box: a
+    // hull each.
     let mut obj = String::new();
     for (k, (name, x0)) in [("left", -0.1f32), ("right", 0.0)].into_iter().enumerate() {
         obj.push_str(&format!("o {name}\n"));
-        for t in moved(&box_triangles([0.05, 0.05, 0.05]), [x0 + 0.05, 0.0, 0.0]) {
+        for t in moved(
+            &frustum_triangles([0.05, 0.05, 0.05]),
+            [x0 + 0.05, 0.0, 0.0],
+        ) {
             for v in t {
                 obj.push_str(&format!("v {} {} {}\n", v[0], v[1], v[2]));
             }
@@ -553,50 +606,136 @@ fn a_mesh_of_separate_parts_is_a_hull_per_part() {
             "legs as one"
         ]
     );
-    assert_eq!(p.hulls.len(), 5);
-    assert_eq!(
-        sorted(p.hulls[0].clone()),
-        sorted(
-            corners(LEG)
-                .iter()
-                .map(|v| [v[0] - 0.2, v[1], v[2]])
-                .collect()
-        )
-    );
-    assert_eq!(
-        sorted(p.hulls[1].clone()),
-        sorted(
-            corners(LEG)
-                .iter()
-                .map(|v| [v[0] + 0.2, v[1], v[2]])
-                .collect()
-        )
-    );
-    assert_eq!(p.hulls[2].len(), 8);
-    assert_eq!(p.hulls[3].len(), 8);
-    // Each part keeps the file's frame: both legs sit about the obstacle's
-    // centre, turned with it.
-    for k in 0..4 {
-        assert_eq!(p.obstacles[k].centre, p.obstacles[k / 2 * 2].centre);
+    // The legs: boxes of their size, each keeping the mesh's placement
+    // (turned 90 degrees about z: the legs 0.2 either side along y).
+    for (k, side) in [(0, -1.0f32), (1, 1.0)] {
+        assert!(close(half_extents(&p, k), LEG), "{:?}", p.obstacles[k]);
+        let want = [1.0, 0.5 + 0.2 * side, 0.0];
+        assert!(
+            (0..3).all(|i| (p.obstacles[k].centre[i] - want[i]).abs() < 1e-6),
+            "{:?}",
+            p.obstacles[k]
+        );
+        assert!((p.obstacles[k].euler_123[2] - 90f32.to_radians()).abs() < 1e-6);
     }
-    assert!((p.obstacles[1].euler_123[2] - 90f32.to_radians()).abs() < 1e-6);
-    // One hull round both legs: their 8 outer corners.
-    assert_eq!(p.hulls[4].len(), 8);
-    assert!(p.hulls[4].iter().all(|v| v[0].abs() > 0.2));
+    // The pieces: a hull each, in the file's frame about the obstacle's
+    // centre.
+    assert_eq!(p.hulls.len(), 2);
+    assert_eq!(
+        [2, 3].map(|k| p.obstacles[k].shape),
+        [Shape::Convex { hull: 0 }, Shape::Convex { hull: 1 }]
+    );
+    assert!(p.hulls.iter().all(|h| h.len() == 8));
+    assert_eq!(p.obstacles[2].centre, [-1.0, 0.5, 0.0]);
+    assert_eq!(p.obstacles[3].centre, [-1.0, 0.5, 0.0]);
+    // One box round both legs.
+    assert!(
+        close(half_extents(&p, 4), [0.25, 0.05, 0.2]),
+        "{:?}",
+        p.obstacles[4]
+    );
     // The gap between the legs (the obstacle's centre) is free of the
-    // parts, 0.15 from each, and inside the single hull.
-    let polytopes = hull_polytopes(&p);
+    // parts, 0.15 from each (the checker's geometry and the core's), and
+    // inside the single box.
     let scenario = p.scenario().unwrap();
     let world = scenario.world();
-    let centre = |o: usize| vec3(p.obstacles[o].centre);
     for part in 0..2 {
-        let d = signed_distance(&p.obstacles[part].shape, &polytopes, [0.0; 3]);
-        assert!((d - 0.15).abs() < 1e-6, "part {part}: {d}");
-        let core = world[part].clearance_uncut(&centre(part), PointKind::Joint, world.hulls);
+        let d = world_distance(&p, part, [1.0, 0.5, 0.0]);
+        assert!((d - 0.15).abs() < 1e-5, "part {part}: {d}");
+        let core =
+            world[part].clearance_uncut(&vec3([1.0, 0.5, 0.0]), PointKind::Joint, world.hulls);
         assert!(core > 0.0, "the core sees the gap free too: {core}");
     }
-    let d = signed_distance(&p.obstacles[4].shape, &polytopes, [0.0; 3]);
-    assert!(d < 0.0, "inside the one hull: {d}");
+    let d = world_distance(&p, 4, [0.0, -1.0, 0.0]);
+    assert!(d < 0.0, "inside the one box: {d}");
+}
+
+#[test]
+fn more_parts_than_hull_slots_share_hulls_that_hold_them_and_the_loader_says_so() {
+    // Nine small parts along x in one STL, parts 6 and 7 the closest pair.
+    let dir = tempfile::tempdir().unwrap();
+    let at = |k: usize| 0.05 * k as f32 - if k == 6 { 0.02 } else { 0.0 };
+    let nine = |shape: fn([f32; 3]) -> Vec<[[f32; 3]; 3]>| {
+        let mut all = Vec::new();
+        for k in 0..9 {
+            all.extend(moved(&shape([0.01, 0.01, 0.01]), [at(k), 0.0, 0.0]));
+        }
+        all
+    };
+    let frusta = nine(frustum_triangles);
+    std::fs::write(dir.path().join("frusta.stl"), binary_stl(&frusta)).unwrap();
+    std::fs::write(
+        dir.path().join("boxes.stl"),
+        binary_stl(&nine(box_triangles)),
+    )
+    .unwrap();
+    let mesh = |file: &str| {
+        format!("\n[[obstacles]]\nname = \"nine\"\nshape = \"mesh\"\nmesh = \"{file}\"\ncentre = [1.0, 0.5, 0.0]\n")
+    };
+    let line = head().lines().count() + 2;
+    // Nine boxes: nine box obstacles, no hull, nothing to say.
+    let p = load_in(dir.path(), &mesh("boxes.stl")).unwrap();
+    assert!(p.hulls.is_empty() && p.notes.is_empty(), "{:?}", p.notes);
+    assert_eq!(p.obstacles.len(), 9);
+    assert!((0..9).all(|k| close(half_extents(&p, k), [0.01; 3])));
+    // Nine parts that are not boxes, eight hull slots: the closest two
+    // share one, and the note says which.
+    let p = load_in(dir.path(), &mesh("frusta.stl")).unwrap();
+    assert_eq!(p.hulls.len(), 8);
+    let mut names: Vec<String> = (1..=9)
+        .filter(|k| *k != 6 && *k != 7)
+        .map(|k| format!("nine part {k}"))
+        .collect();
+    names.insert(5, "nine parts 6, 7".into());
+    assert_eq!(p.obstacle_names, names);
+    assert_eq!(
+        p.notes,
+        [format!("obstacle \"nine\" (line {line}): its mesh has 9 parts that are not boxes, more than the 8 hull slots left for it (a scenario holds 8 hulls): neighbouring parts share a hull that holds them (6 + 7), which closes the gaps between them")]
+    );
+    // Every vertex of every part is in (or on) its obstacle.
+    for (k, t) in frusta.chunks(12).enumerate() {
+        let obstacle = if k < 6 { k } else { k - 1 };
+        for v in t.iter().flatten() {
+            let world = [
+                1.0 + f64::from(v[0]),
+                0.5 + f64::from(v[1]),
+                f64::from(v[2]),
+            ];
+            let d = world_distance(&p, obstacle, world);
+            assert!(d <= 1e-6, "part {} outside obstacle {obstacle}: {d}", k + 1);
+        }
+    }
+    // A convex obstacle after it keeps its slot: the mesh gets seven.
+    let p = load_in(
+        dir.path(),
+        &format!("{}\n[[obstacles]]\nname = \"after\"\nshape = \"convex\"\ncentre = [0.0, -1.0, 0.0]\nvertices = {}\n", mesh("frusta.stl"), box_vertices([0.1; 3])),
+    )
+    .unwrap();
+    assert_eq!(p.hulls.len(), 8);
+    assert_eq!(p.obstacle_names.last().unwrap(), "after");
+    assert_eq!(p.obstacles.len(), 8);
+    assert!(
+        p.notes[0].contains("more than the 7 hull slots left for it"),
+        "{:?}",
+        p.notes
+    );
+    // Eight convex obstacles before it leave none: a one-line error there.
+    let mut eight = String::new();
+    for k in 0..8 {
+        eight.push_str(&format!(
+            "\n[[obstacles]]\nshape = \"convex\"\ncentre = [{}, -1.0, 0.0]\nvertices = {}\n",
+            k as f32 * 0.3,
+            box_vertices([0.1; 3])
+        ));
+    }
+    let e = load_in(dir.path(), &format!("{eight}{}", mesh("frusta.stl"))).unwrap_err();
+    let mesh_line = head().lines().count() + eight.lines().count() + 2;
+    assert!(
+        e.contains(&format!(
+            "{mesh_line}: obstacle: more than 8 convex or mesh obstacles"
+        )),
+        "{e}"
+    );
 }
 
 #[test]
@@ -614,16 +753,11 @@ fn mesh_parts_errors_are_one_line_at_the_obstacle() {
         format!("\n[[obstacles]]\nname = \"part\"\nshape = \"mesh\"\nmesh = \"nine.stl\"\ncentre = [1.0, 0.5, 0.0]\n{keys}\n")
     };
     let line = head().lines().count() + 2;
-    for (keys, says) in [
-        ("", "9 separate parts"),
-        ("parts = \"some\"", "`parts` is \"separate\" or \"one\""),
-    ] {
-        let e = load_in(dir.path(), &one(keys)).unwrap_err();
-        assert!(
-            e.contains(&format!("{line}")) && e.contains(says),
-            "{keys}: {e}"
-        );
-    }
+    let e = load_in(dir.path(), &one("parts = \"some\"")).unwrap_err();
+    assert!(
+        e.contains(&format!("{line}")) && e.contains("`parts` is \"separate\" or \"one\""),
+        "{e}"
+    );
     // A 20-sided prism (40 corners) beside a box: that part is planned
     // round an enclosure of 32 corners, and the note names it.
     let ring = |k: usize, z: f32| {
@@ -648,17 +782,26 @@ fn mesh_parts_errors_are_one_line_at_the_obstacle() {
         "\n[[obstacles]]\nname = \"drum\"\nshape = \"mesh\"\nmesh = \"drum.stl\"\ncentre = [1.0, 0.5, 0.0]\n",
     )
     .unwrap();
-    assert_eq!(p.hulls.len(), 2);
-    assert!(p.hulls[0].len() <= 32 && p.hulls[1].len() == 8);
+    // The drum a hull of at most 32 corners, the box beside it a box.
+    assert_eq!(p.hulls.len(), 1);
+    assert!(p.hulls[0].len() <= 32);
+    assert_eq!(p.obstacles[0].shape, Shape::Convex { hull: 0 });
+    assert!(close(half_extents(&p, 1), [0.05; 3]));
     assert_eq!(p.notes.len(), 1, "{:?}", p.notes);
     assert!(
         p.notes[0].starts_with(&format!("obstacle \"drum part 1\" (line {line}): its hull has 40 corners, more than the 32 a hull may have: planned round an enclosing hull of ")),
         "{:?}",
         p.notes
     );
-    // Nine small boxes as one hull fit.
+    // Nine small boxes in a row as one: the box round them all.
     let p = load_in(dir.path(), &one("parts = \"one\"")).unwrap();
-    assert_eq!(p.hulls.len(), 1);
+    assert!(p.hulls.is_empty());
+    assert_eq!(p.obstacle_names, ["part"]);
+    assert!(
+        close(half_extents(&p, 0), [0.21, 0.01, 0.01]),
+        "{:?}",
+        p.obstacles[0]
+    );
     let e = load(
         "\n[[obstacles]]\nshape = \"box\"\ncentre = [1.0, 0.5, 0.0]\nhalf_extents = [0.1, 0.1, 0.1]\nparts = \"one\"\n",
     )

@@ -21,6 +21,7 @@ use capp_core::{
 };
 
 use crate::enclosure::{enclose, Enclosure};
+use crate::mesh_parts::{box_of, merge, PlacedBox};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -383,25 +384,100 @@ fn mesh_hull(points: &[[f64; 3]]) -> Result<Enclosure, NoHull> {
     enclose(points, MAX_HULL_VERTICES).map_err(NoHull::Points)
 }
 
-/// The hulls of a mesh's `parts` (already scaled): one per part when
-/// `separate` and every part spans a volume of its own (a closed part), or
-/// else one round them all (an open surface, such as a mesh of loose
-/// faces, has flat parts: then the mesh is one hull, as a mesh always was).
-fn mesh_hulls(parts: Vec<Vec<[f64; 3]>>, separate: bool) -> Result<Vec<Enclosure>, String> {
-    if separate && parts.len() > 1 {
-        let mut hulls = Vec::new();
-        for part in &parts {
-            match mesh_hull(part) {
-                Ok(hull) if Hull::new(&as_f32(&hull.corners)).is_ok() => hulls.push(hull),
-                // Flat (to the core too): the mesh is one hull, below.
-                _ => {}
-            }
-        }
-        if hulls.len() == parts.len() {
-            return Ok(hulls);
+/// What one obstacle entry becomes: a box or a hull, made of these parts
+/// of its mesh (0-based; empty for a `convex` entry).
+struct Piece {
+    parts: Vec<usize>,
+    form: Form,
+}
+
+enum Form {
+    /// A mesh part that is a box ([`crate::mesh_parts`]).
+    Box(PlacedBox),
+    /// A hull's corners, and the note when they enclose the part's hull.
+    Hull(Vec<[f32; 3]>, Option<String>),
+}
+
+/// The pieces of a mesh's `parts` (already scaled), and a note when parts
+/// were merged. With `separate` and every part spanning a volume of its
+/// own (a closed part): each part that is a box a box, each other part a
+/// hull, and when those are more than `slots` (the hull slots this
+/// obstacle may take), neighbouring ones merged into `slots` hulls. Else
+/// (`parts = "one"`, or an open surface such as a mesh of loose faces,
+/// whose parts are flat) one piece round them all, a box if it is one.
+/// `placement` is the mesh's centre and Euler angles, radians (for the
+/// boxes).
+fn mesh_pieces(
+    parts: Vec<Vec<[f64; 3]>>,
+    separate: bool,
+    slots: usize,
+    placement: &([f64; 3], [f64; 3]),
+    unit: &str,
+) -> Result<(Vec<Piece>, Option<String>), String> {
+    let closed = |part: &[[f64; 3]]| {
+        mesh_hull(part).is_ok_and(|hull| Hull::new(&as_f32(&hull.corners)).is_ok())
+    };
+    let hull_piece = |parts: Vec<usize>, points: &[[f64; 3]]| -> Result<Piece, String> {
+        let hull = mesh_hull(points).map_err(|e| e.to_string())?;
+        let note = enclosure_note(&hull, unit);
+        Ok(Piece {
+            parts,
+            form: Form::Hull(as_f32(&hull.corners), note),
+        })
+    };
+    let piece = |parts: Vec<usize>, points: &[[f64; 3]]| match box_of(points) {
+        Some(b) => Ok(Piece {
+            parts,
+            form: Form::Box(b.placed(placement.0, placement.1)),
+        }),
+        None => hull_piece(parts, points),
+    };
+    if !(separate && parts.len() > 1 && parts.iter().all(|p| closed(p))) {
+        let all = parts.concat();
+        return Ok((vec![piece(Vec::new(), &all)?], None));
+    }
+    let mut pieces = Vec::new();
+    let mut rest = Vec::new();
+    for (k, part) in parts.iter().enumerate() {
+        match box_of(part) {
+            Some(b) => pieces.push(Piece {
+                parts: vec![k],
+                form: Form::Box(b.placed(placement.0, placement.1)),
+            }),
+            None => rest.push(k),
         }
     }
-    Ok(vec![mesh_hull(&parts.concat()).map_err(|e| e.to_string())?])
+    let mut note = None;
+    if rest.len() > slots && slots > 0 {
+        let points: Vec<Vec<[f64; 3]>> = rest.iter().map(|&k| parts[k].clone()).collect();
+        let groups: Vec<Vec<usize>> = merge(&points, slots)
+            .into_iter()
+            .map(|g| g.into_iter().map(|i| rest[i]).collect())
+            .collect();
+        let listed: Vec<String> = groups
+            .iter()
+            .filter(|g| g.len() > 1)
+            .map(|g| {
+                let parts: Vec<String> = g.iter().map(|k| (k + 1).to_string()).collect();
+                parts.join(" + ")
+            })
+            .collect();
+        note = Some(format!(
+            "its mesh has {} parts that are not boxes, more than the {slots} hull slots left for it (a scenario holds {MAX_HULLS} hulls): neighbouring parts share a hull that holds them ({}), which closes the gaps between them",
+            rest.len(),
+            listed.join("; ")
+        ));
+        for group in groups {
+            let points: Vec<[f64; 3]> = group.iter().flat_map(|&k| parts[k].clone()).collect();
+            pieces.push(hull_piece(group, &points)?);
+        }
+    } else {
+        for k in rest {
+            pieces.push(hull_piece(vec![k], &parts[k])?);
+        }
+    }
+    pieces.sort_by_key(|p| p.parts.first().copied());
+    Ok((pieces, note))
 }
 
 /// What the notes say of a mesh part planned round an enclosure instead of
@@ -1102,7 +1178,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
     let mut hulls: Vec<Vec<[f32; 3]>> = Vec::new();
     // What the loader did that a user should know of (meshes enclosed).
     let mut notes: Vec<String> = Vec::new();
-    for spec in file.obstacles {
+    // Whether each obstacle needs hull slots (a `convex` or a `mesh`): a
+    // mesh of many parts leaves one slot for each such obstacle after it.
+    let needs_hull: Vec<bool> = file
+        .obstacles
+        .iter()
+        .map(|spec| matches!(spec.get_ref().shape.as_deref(), Some("convex" | "mesh")))
+        .collect();
+    for (index, spec) in file.obstacles.into_iter().enumerate() {
         let line = at(spec.span());
         let s = spec.into_inner();
         let solid = |shape| Solid {
@@ -1110,8 +1193,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             euler_123: s.euler.map(|x| (x * angle) as f32),
             shape,
         };
-        let mut enclosed: Vec<Option<String>> = Vec::new();
-        let corners: Vec<Vec<[f32; 3]>> = match s.shape().map_err(|e| err(line, e))? {
+        let who = |name: &str, index: usize| {
+            if name.is_empty() {
+                format!("obstacle {index} (line {line})")
+            } else {
+                format!("obstacle \"{name}\" (line {line})")
+            }
+        };
+        let later = needs_hull.iter().skip(index + 1).filter(|&&h| h).count();
+        let slots = MAX_HULLS.saturating_sub(hulls.len() + later);
+        let pieces: Vec<Piece> = match s.shape().map_err(|e| err(line, e))? {
             Given::Shape(shape) => {
                 obstacles.push(solid(shape));
                 obstacle_names.push(s.name);
@@ -1119,7 +1210,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 continue;
             }
             Given::Vertices(v) => {
-                vec![hull_of(&v).map_err(|e| err(line, format!("obstacle: {e}")))?]
+                let corners = hull_of(&v).map_err(|e| err(line, format!("obstacle: {e}")))?;
+                vec![Piece {
+                    parts: Vec::new(),
+                    form: Form::Hull(corners, None),
+                }]
             }
             Given::Mesh {
                 file,
@@ -1128,53 +1223,62 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             } => {
                 let here = path.parent().unwrap_or(Path::new("."));
                 let parts = mesh_parts(&here.join(&file), &file).map_err(|e| err(line, e))?;
-                let scaled = parts
+                let scaled: Vec<Vec<[f64; 3]>> = parts
                     .into_iter()
                     .map(|part| part.into_iter().map(|p| p.map(|x| x * scale)).collect())
                     .collect();
-                let hulls = mesh_hulls(scaled, separate)
-                    .map_err(|e| err(line, format!("obstacle: mesh \"{file}\": {e}")))?;
-                enclosed = hulls
-                    .iter()
-                    .map(|h| enclosure_note(h, length_unit))
-                    .collect();
-                hulls.iter().map(|h| as_f32(&h.corners)).collect()
+                let placement = (s.centre, s.euler.map(|x| x * angle));
+                let (pieces, merged) =
+                    mesh_pieces(scaled, separate, slots, &placement, length_unit)
+                        .map_err(|e| err(line, format!("obstacle: mesh \"{file}\": {e}")))?;
+                if let Some(m) = merged {
+                    notes.push(format!("{}: {m}", who(&s.name, obstacles.len())));
+                }
+                pieces
             }
         };
-        if hulls.len() + corners.len() > MAX_HULLS {
-            let what = if corners.len() > 1 {
-                format!(
-                    "its mesh has {} separate parts, a hull each (give `parts = \"one\"` for one hull round them all, or merge parts in CAD), and ",
-                    corners.len()
-                )
-            } else {
-                String::new()
-            };
+        let wanted = pieces
+            .iter()
+            .filter(|p| matches!(p.form, Form::Hull(..)))
+            .count();
+        if hulls.len() + wanted > MAX_HULLS {
             return Err(err(
                 line,
-                format!("obstacle: {what}more than {MAX_HULLS} convex or mesh obstacles (each has its own hull, and a scenario holds {MAX_HULLS})"),
+                format!("obstacle: more than {MAX_HULLS} convex or mesh obstacles (each has its own hull, and a scenario holds {MAX_HULLS})"),
             ));
         }
-        let count = corners.len();
-        for (k, part) in corners.into_iter().enumerate() {
-            hulls.push(part);
-            obstacles.push(solid(Shape::Convex {
-                hull: (hulls.len() - 1) as u8,
-            }));
-            let name = if count > 1 {
-                format!("{} part {}", s.name, k + 1)
+        let several = pieces.len() > 1 || pieces.iter().any(|p| p.parts.len() > 1);
+        for piece in pieces {
+            let name = if several {
+                let list: Vec<String> = piece.parts.iter().map(|k| (k + 1).to_string()).collect();
+                let word = if piece.parts.len() > 1 {
+                    "parts"
+                } else {
+                    "part"
+                };
+                format!("{} {word} {}", s.name, list.join(", "))
                     .trim_start()
                     .to_string()
             } else {
                 s.name.clone()
             };
-            if let Some(Some(note)) = enclosed.get(k) {
-                let who = if name.is_empty() {
-                    format!("obstacle {}", obstacles.len())
-                } else {
-                    format!("obstacle \"{name}\"")
-                };
-                notes.push(format!("{who} (line {line}): {note}"));
+            match piece.form {
+                Form::Box(b) => obstacles.push(Solid {
+                    centre: b.centre,
+                    euler_123: b.euler_123,
+                    shape: Shape::Cuboid {
+                        half_extents: b.half_extents,
+                    },
+                }),
+                Form::Hull(corners, note) => {
+                    hulls.push(corners);
+                    obstacles.push(solid(Shape::Convex {
+                        hull: (hulls.len() - 1) as u8,
+                    }));
+                    if let Some(note) = note {
+                        notes.push(format!("{}: {note}", who(&name, obstacles.len() - 1)));
+                    }
+                }
             }
             obstacle_names.push(name);
             obstacle_lines.push(Some(line));

@@ -154,9 +154,9 @@ fn copy_scenario(problem: &Problem, to: &Path) -> Result<()> {
     let text =
         fs::read_to_string(source).with_context(|| format!("cannot read {}", source.display()))?;
     let mut text = text;
-    let from_urdf = problem.joints.first().is_some_and(|j| j.origin.is_some());
-    let has_hulls = !problem.hulls.is_empty();
-    if problem.kind == SourceKind::Toml && (from_urdf || has_hulls) {
+    // Every TOML scenario is rewritten (unchanged where it names no file):
+    // a mesh of boxes has no hull left to tell it by.
+    if problem.kind == SourceKind::Toml {
         let mut doc: toml_edit::DocumentMut = text
             .parse()
             .with_context(|| format!("cannot re-read {}", source.display()))?;

@@ -172,7 +172,12 @@ pub fn check_accepts(out: &Path) -> String {
         .output()
         .unwrap();
     let report = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert_eq!(o.status.code(), Some(0), "{report}");
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{report}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(report.contains("ACCEPTED"), "{report}");
     report
 }

@@ -1,0 +1,605 @@
+//! What a CAD mesh's separate parts become on the board (issue 24): boxes
+//! where they are boxes, hulls for the rest, and neighbouring parts merged
+//! into shared hulls when there are more than the scenario has hull slots
+//! for (`capp_core::obstacle::MAX_HULLS`).
+//!
+//! A part that is a box (a shelf's board, a plate, a block, a table's leg:
+//! its convex hull has 8 corners, each at a corner of the box its edges
+//! span) is planned as a box obstacle: the same solid, exact, about a third
+//! of a hull's cost a pair on the board (`BENCHMARKS.md`: 119 against 395
+//! M4F instructions a pair in the loop), and it takes no hull slot, so a
+//! shelving unit of a dozen boards loads. [`box_of`] recognises it from the
+//! hull's corners alone and fits the box round them (every corner inside by
+//! construction); [`BoxPart::placed`] places it in the world for the core,
+//! checking that the `f32` box the core builds still holds every corner.
+//!
+//! The other parts are hulls. When more of them than the slots left,
+//! [`merge`] joins them greedily, each time the two groups whose joint hull
+//! adds the least volume to theirs (agglomerative clustering by the hulls'
+//! volume, as bounding-volume hierarchies are built bottom-up; Goldsmith and
+//! Salmon, "Automatic creation of object hierarchies for ray tracing",
+//! 1987, use the same least-growth rule top-down). A merged hull holds
+//! every point of its parts, so a plan that keeps its margins from it keeps
+//! them from the parts; it only closes gaps between parts the merge joined,
+//! which the loader's note names.
+//!
+//! Written here: recognising a box among a mesh's parts and merging parts
+//! under a hull budget are not what mesh or decomposition crates offer
+//! (they split non-convex parts, the opposite direction).
+
+use crate::polytope::{cloud_hull, cross, dot, spread, sub, CloudHull, V3};
+
+/// Corners within this of a box's corners (relative to the part's size)
+/// make the part a box: a few `f32` ulps of a rotated box written by CAD
+/// (binary STL stores `f32`), far below any modelling detail.
+const BOX_TOLERANCE: f64 = 1e-6;
+
+/// Relative slack on a placed box's half-extents beyond the measured
+/// growth: two `f32` ulps of the box's size and distance from the origin,
+/// for the core's own rounding as it takes a point into the box's frame.
+const ROUNDING: f64 = 2.0 * f32::EPSILON as f64;
+
+/// Most groups [`merge`] compares pairwise (each comparison builds a
+/// hull): more parts than this are first paired off along the mesh's
+/// longest axis, neighbour with neighbour, until they are this few.
+const MAX_COMPARED: usize = 128;
+
+/// A part that is a box, in the part's (the mesh file's) frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoxPart {
+    /// The box's centre, length units.
+    pub centre: V3,
+    /// Its axes (unit, right-handed): the columns of its rotation.
+    pub axes: [V3; 3],
+    /// Its half-extents along `axes`, length units; every corner of the
+    /// part is within them.
+    pub half_extents: V3,
+}
+
+/// A box placed for the core: the `f32` values an obstacle takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacedBox {
+    /// World centre, length units.
+    pub centre: [f32; 3],
+    /// `R = Rz Ry Rx` of these angles (radians, `[rx, ry, rz]`) turns the
+    /// box's frame into the world's.
+    pub euler_123: [f32; 3],
+    /// Half-extents, length units.
+    pub half_extents: [f32; 3],
+}
+
+/// The box `points` are, when their convex hull is a box (8 corners, each
+/// at a corner of the box the edges from one of them span, to
+/// [`BOX_TOLERANCE`]); `None` otherwise (or for points that span no volume).
+pub fn box_of(points: &[V3]) -> Option<BoxPart> {
+    let hull = cloud_hull(points).ok()?;
+    let corners = &hull.corners;
+    if corners.len() != 8 {
+        return None;
+    }
+    let tolerance = BOX_TOLERANCE * spread(corners);
+    let centre = mean(corners);
+    // From one corner, the nearest other is along an edge (a diagonal is
+    // longer than the edges it spans); the nearest of those square to it is
+    // along a second edge; the third axis is square to both.
+    let p0 = corners[0];
+    let from_p0: Vec<V3> = corners[1..].iter().map(|&p| sub(p, p0)).collect();
+    let shortest =
+        |it: &mut dyn Iterator<Item = V3>| it.min_by(|a, b| dot(*a, *a).total_cmp(&dot(*b, *b)));
+    let u = unit(shortest(&mut from_p0.iter().copied())?)?;
+    let e2 = shortest(
+        &mut from_p0
+            .iter()
+            .copied()
+            .filter(|&e| dot(e, u).abs() <= tolerance),
+    )?;
+    let v = unit(sub(e2, scaled(u, dot(e2, u))))?;
+    let mut axes = [u, v, cross(u, v)];
+    // Along the part's own axes (as most parts are drawn): those axes, in
+    // their order, so the box keeps the mesh's placement.
+    let along: Vec<usize> = axes
+        .iter()
+        .filter_map(|a| (0..3).find(|&k| a[k].abs() >= 1.0 - 1e-12))
+        .collect();
+    if along.len() == 3
+        && along
+            .iter()
+            .all(|k| along.iter().filter(|&j| j == k).count() == 1)
+    {
+        axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    // Half-extents from the corners themselves: every corner within them.
+    let half_extents = axes.map(|a| {
+        corners
+            .iter()
+            .map(|&p| dot(sub(p, centre), a).abs())
+            .fold(0.0, f64::max)
+    });
+    if half_extents.iter().any(|&h| h <= tolerance) {
+        return None;
+    }
+    // A box: each corner at one of its corners, all eight taken.
+    let mut seen = 0u8;
+    for &p in corners {
+        let mut pattern = 0u8;
+        for (k, (&a, &h)) in axes.iter().zip(&half_extents).enumerate() {
+            let x = dot(sub(p, centre), a);
+            if (x.abs() - h).abs() > tolerance {
+                return None;
+            }
+            pattern |= u8::from(x > 0.0) << k;
+        }
+        seen |= 1 << pattern;
+    }
+    (seen == u8::MAX).then_some(BoxPart {
+        centre,
+        axes,
+        half_extents,
+    })
+}
+
+impl BoxPart {
+    /// The box in the world, for a mesh placed at `centre` turned by
+    /// `euler` (radians, `R = Rz Ry Rx`), as the core's `f32` values. A box
+    /// along the mesh's axes keeps the mesh's angles; another's axis called
+    /// x is the one nearest the world's horizontal plane (a box is the same
+    /// whichever of its axes is called x), so its angles are far from the
+    /// `ry = +-90 deg` lock (`|sin ry| <= 1/sqrt 3`).
+    /// The half-extents are grown by what the `f32` rotation and centre move
+    /// the box's corners (measured: the core's own rotation of the rounded
+    /// angles) plus [`ROUNDING`] of its size and distance from the origin,
+    /// so the box the core builds holds every corner of the part.
+    pub fn placed(&self, centre: V3, euler: V3) -> PlacedBox {
+        let rotation = crate::geometry::rotation(euler);
+        let turn = |a: V3| -> V3 { [0, 1, 2].map(|i| dot(rotation[i], a)) };
+        let world_centre = add(centre, turn(self.centre));
+        let world_axes = self.axes.map(turn);
+        let (order, euler) = if self.axes == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+            // Along the mesh's axes: its own placement.
+            ([0, 1, 2], euler)
+        } else {
+            // The cyclic order (right-handed) whose x is most level.
+            let first = (0..3)
+                .min_by(|&a, &b| world_axes[a][2].abs().total_cmp(&world_axes[b][2].abs()))
+                .unwrap_or(0);
+            let order = [first, (first + 1) % 3, (first + 2) % 3];
+            let (x, y, z) = (
+                world_axes[order[0]],
+                world_axes[order[1]],
+                world_axes[order[2]],
+            );
+            // R's columns are x, y, z: R[2][0] = x_z = -sin ry, R[2][1] = y_z
+            // = cos ry sin rx, R[2][2] = z_z, R[1][0] = x_y = sin rz cos ry,
+            // R[0][0] = x_x.
+            let angles = [
+                libm::atan2(y[2], z[2]),
+                libm::asin((-x[2]).clamp(-1.0, 1.0)),
+                libm::atan2(x[1], x[0]),
+            ];
+            (order, angles)
+        };
+        let (x, y, z) = (
+            world_axes[order[0]],
+            world_axes[order[1]],
+            world_axes[order[2]],
+        );
+        let half = order.map(|k| self.half_extents[k]);
+        let euler_123 = euler.map(|a| a as f32);
+        let centre_f32 = world_centre.map(|c| c as f32);
+        // Every corner of the box, where the f32 box must hold it.
+        let r = capp_core::math::rotation_123(euler_123[0], euler_123[1], euler_123[2]);
+        let mut grown = half;
+        for pattern in 0..8u8 {
+            let mut corner = world_centre;
+            for (k, axis) in [x, y, z].iter().enumerate() {
+                let s = if pattern >> k & 1 == 1 {
+                    half[k]
+                } else {
+                    -half[k]
+                };
+                corner = add(corner, scaled(*axis, s));
+            }
+            let d = [0, 1, 2].map(|i| corner[i] - f64::from(centre_f32[i]));
+            for (k, g) in grown.iter_mut().enumerate() {
+                let local: f64 = (0..3).map(|i| f64::from(r[(i, k)]) * d[i]).sum();
+                *g = g.max(local.abs());
+            }
+        }
+        let size = half.iter().fold(0.0, |m: f64, &h| m.max(h));
+        let slack = ROUNDING * (size + world_centre.iter().fold(0.0, |m: f64, &c| m.max(c.abs())));
+        PlacedBox {
+            centre: centre_f32,
+            euler_123,
+            half_extents: grown.map(|g| round_up(g + slack)),
+        }
+    }
+}
+
+/// Groups of `parts` (each a part's points), at most `groups` of them (at
+/// least 1), as the module docs merge them: each group the indices of the
+/// parts it holds, ascending, the groups in the order of their first part.
+/// Parts whose points span no volume count as points of their group.
+pub fn merge(parts: &[Vec<V3>], groups: usize) -> Vec<Vec<usize>> {
+    let groups = groups.max(1);
+    let mut clusters: Vec<Cluster> = parts
+        .iter()
+        .enumerate()
+        .map(|(k, points)| Cluster::new(vec![k], points.clone()))
+        .collect();
+    // Too many to compare pairwise: neighbours along the longest axis
+    // first, pair by pair.
+    while clusters.len() > MAX_COMPARED.max(groups) {
+        let all: Vec<V3> = clusters.iter().flat_map(|c| c.corners.clone()).collect();
+        let axis = longest_axis(&all);
+        clusters.sort_by(|a, b| a.mean()[axis].total_cmp(&b.mean()[axis]));
+        let mut paired = Vec::with_capacity(clusters.len() / 2 + 1);
+        let mut it = clusters.into_iter();
+        while let Some(a) = it.next() {
+            paired.push(match it.next() {
+                Some(b) => a.joined(&b),
+                None => a,
+            });
+        }
+        clusters = paired;
+    }
+    // Least growth first. Each pair's growth is kept (a hull a pair) and
+    // only the merged group's recomputed (a hull per other group).
+    let growth = |a: &Cluster, b: &Cluster| a.joined(b).volume - a.volume - b.volume;
+    let n = clusters.len();
+    let mut slots: Vec<Option<Cluster>> = clusters.into_iter().map(Some).collect();
+    let mut grows = vec![vec![f64::INFINITY; n]; n];
+    for i in 0..n {
+        for j in i + 1..n {
+            if let (Some(a), Some(b)) = (&slots[i], &slots[j]) {
+                grows[i][j] = growth(a, b);
+            }
+        }
+    }
+    let mut count = n;
+    while count > groups {
+        let mut best: Option<(f64, usize, usize)> = None;
+        for (i, row) in grows.iter().enumerate() {
+            for (j, &g) in row.iter().enumerate().skip(i + 1) {
+                if slots[i].is_some() && slots[j].is_some() && best.is_none_or(|b| g < b.0) {
+                    best = Some((g, i, j));
+                }
+            }
+        }
+        let Some((_, i, j)) = best else { break };
+        let (Some(a), Some(b)) = (slots[i].take(), slots[j].take()) else {
+            break;
+        };
+        let joined = a.joined(&b);
+        for (k, other) in slots.iter().enumerate() {
+            if let Some(other) = other {
+                let g = growth(&joined, other);
+                let (lo, hi) = (k.min(i), k.max(i));
+                grows[lo][hi] = g;
+            }
+        }
+        slots[i] = Some(joined);
+        count -= 1;
+    }
+    let clusters: Vec<Cluster> = slots.into_iter().flatten().collect();
+    let mut out: Vec<Vec<usize>> = clusters
+        .into_iter()
+        .map(|mut c| {
+            c.parts.sort_unstable();
+            c.parts
+        })
+        .collect();
+    out.sort_by_key(|g| g.first().copied());
+    out
+}
+
+/// Parts merged so far: their indices, their hull's corners and volume.
+struct Cluster {
+    parts: Vec<usize>,
+    corners: Vec<V3>,
+    volume: f64,
+}
+
+impl Cluster {
+    fn new(parts: Vec<usize>, points: Vec<V3>) -> Self {
+        match cloud_hull(&points) {
+            Ok(hull) => Cluster {
+                parts,
+                volume: volume(&hull),
+                corners: hull.corners,
+            },
+            // No volume (flat, a line, a point): its points, volume 0.
+            Err(_) => Cluster {
+                parts,
+                corners: points,
+                volume: 0.0,
+            },
+        }
+    }
+
+    fn joined(&self, other: &Cluster) -> Cluster {
+        let mut parts = self.parts.clone();
+        parts.extend(&other.parts);
+        let mut points = self.corners.clone();
+        points.extend(&other.corners);
+        Cluster::new(parts, points)
+    }
+
+    fn mean(&self) -> V3 {
+        mean(&self.corners)
+    }
+}
+
+/// The volume of a hull: its boundary triangles' cones from the origin
+/// (signed, the outward triangles counter-clockwise).
+fn volume(hull: &CloudHull) -> f64 {
+    hull.triangles
+        .iter()
+        .map(|t| dot(t.corners[0], cross(t.corners[1], t.corners[2])) / 6.0)
+        .sum()
+}
+
+/// The axis (0, 1, 2) along which `points` spread the most.
+fn longest_axis(points: &[V3]) -> usize {
+    let extent = |k: usize| {
+        let (lo, hi) = points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[k]), hi.max(p[k]))
+            });
+        hi - lo
+    };
+    (0..3)
+        .max_by(|&a, &b| extent(a).total_cmp(&extent(b)))
+        .unwrap_or(0)
+}
+
+fn mean(points: &[V3]) -> V3 {
+    let n = points.len().max(1) as f64;
+    let s = points
+        .iter()
+        .fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]]);
+    s.map(|x| x / n)
+}
+
+fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn scaled(a: V3, s: f64) -> V3 {
+    a.map(|x| x * s)
+}
+
+fn unit(a: V3) -> Option<V3> {
+    let n = dot(a, a).sqrt();
+    (n > 0.0 && n.is_finite()).then(|| scaled(a, 1.0 / n))
+}
+
+/// The least `f32` not below `x`.
+fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::rotation;
+
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// The corners of a box of `half` about `centre` turned by `r` (its
+    /// axes the columns).
+    fn box_corners(centre: V3, r: &[[f64; 3]; 3], half: V3) -> Vec<V3> {
+        (0..8)
+            .map(|c: usize| {
+                let local = [0, 1, 2].map(|a| if c >> a & 1 == 1 { half[a] } else { -half[a] });
+                add(centre, [0, 1, 2].map(|i| dot(r[i], local)))
+            })
+            .collect()
+    }
+
+    fn random_rotation(rng: &mut u64) -> [[f64; 3]; 3] {
+        rotation([0, 1, 2].map(|_| (lcg(rng) - 0.5) * 7.0))
+    }
+
+    #[test]
+    fn turned_boxes_of_any_size_are_recognised_and_the_core_box_holds_them() {
+        let mut rng = 11u64;
+        for case in 0..300 {
+            let scale = 10f64.powf(lcg(&mut rng) * 6.0 - 3.0);
+            let half = [0, 1, 2].map(|_| scale * (0.01 + lcg(&mut rng)));
+            let centre = [0, 1, 2].map(|_| scale * 20.0 * (lcg(&mut rng) - 0.5));
+            let r = random_rotation(&mut rng);
+            let mut points = box_corners(centre, &r, half);
+            // Mesh vertices on its faces and edges are not corners.
+            points.push(add(centre, [0, 1, 2].map(|i| r[i][0] * half[0])));
+            points.push(centre);
+            let part = box_of(&points).unwrap_or_else(|| panic!("case {case}: not a box"));
+            let mut got = part.half_extents;
+            got.sort_by(f64::total_cmp);
+            let mut want = half;
+            want.sort_by(f64::total_cmp);
+            for k in 0..3 {
+                assert!(
+                    (got[k] - want[k]).abs() <= 1e-9 * scale,
+                    "case {case}: {got:?} {want:?}"
+                );
+            }
+            // Placed by a turned, moved mesh frame: the core's f32 box
+            // holds every corner, and is no more than a little larger.
+            let angles = [0, 1, 2].map(|_| (lcg(&mut rng) - 0.5) * 7.0);
+            let frame = rotation(angles);
+            let origin = [0, 1, 2].map(|_| scale * 50.0 * (lcg(&mut rng) - 0.5));
+            let placed = part.placed(origin, angles);
+            assert!(placed.euler_123[1].abs() <= 0.62, "case {case}: {placed:?}");
+            let r32 = capp_core::math::rotation_123(
+                placed.euler_123[0],
+                placed.euler_123[1],
+                placed.euler_123[2],
+            );
+            for p in &points {
+                let world = add(origin, [0, 1, 2].map(|i| dot(frame[i], *p)));
+                let d = [0, 1, 2].map(|i| world[i] - f64::from(placed.centre[i]));
+                for k in 0..3 {
+                    let local: f64 = (0..3).map(|i| f64::from(r32[(i, k)]) * d[i]).sum();
+                    assert!(
+                        local.abs() <= f64::from(placed.half_extents[k]),
+                        "case {case}: outside"
+                    );
+                }
+            }
+            let spread = 1e-5
+                * (scale
+                    + origin
+                        .iter()
+                        .chain(&centre)
+                        .fold(0.0, |m: f64, c| m.max(c.abs())));
+            let mut placed_half = placed.half_extents.map(f64::from);
+            placed_half.sort_by(f64::total_cmp);
+            for k in 0..3 {
+                assert!(
+                    placed_half[k] - want[k] <= spread,
+                    "case {case}: {placed_half:?} {want:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn eight_cornered_parts_that_are_not_boxes_are_not() {
+        let id = rotation([0.0; 3]);
+        let cube = box_corners([0.0; 3], &id, [1.0, 1.0, 1.0]);
+        // A frustum: the top face smaller.
+        let frustum: Vec<V3> = cube
+            .iter()
+            .map(|p| {
+                if p[2] > 0.0 {
+                    [p[0] * 0.9, p[1] * 0.9, p[2]]
+                } else {
+                    *p
+                }
+            })
+            .collect();
+        // A parallelepiped: sheared.
+        let sheared: Vec<V3> = cube
+            .iter()
+            .map(|p| [p[0] + 0.3 * p[2], p[1], p[2]])
+            .collect();
+        // One corner moved out by a thousandth.
+        let mut dented = cube.clone();
+        dented[5] = dented[5].map(|x| x * 1.001);
+        // An L-shaped prism (10 hull corners) and a tetrahedron.
+        let tetra = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let flat: Vec<V3> = cube.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        for (name, points) in [
+            ("frustum", frustum),
+            ("sheared", sheared),
+            ("dented", dented),
+            ("tetrahedron", tetra),
+            ("flat", flat),
+        ] {
+            assert_eq!(box_of(&points), None, "{name}");
+        }
+        assert!(box_of(&cube).is_some());
+    }
+
+    #[test]
+    fn a_box_along_the_meshs_axes_keeps_its_placement() {
+        let id = rotation([0.0; 3]);
+        let part = box_of(&box_corners([0.5, -0.25, 2.0], &id, [0.1, 0.05, 0.2])).unwrap();
+        assert_eq!(
+            part.axes,
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        );
+        for (got, want) in part.half_extents.iter().zip([0.1, 0.05, 0.2]) {
+            assert!((got - want).abs() < 1e-12, "{part:?}");
+        }
+        let euler = [0.1, -1.5, 3.0];
+        let placed = part.placed([1.0, 2.0, 3.0], euler);
+        assert_eq!(placed.euler_123, euler.map(|a| a as f32));
+        let frame = rotation(euler);
+        for (k, row) in frame.iter().enumerate() {
+            let world = 1.0 + k as f64 + dot(*row, [0.5, -0.25, 2.0]);
+            assert!((f64::from(placed.centre[k]) - world).abs() < 1e-6);
+        }
+        for (got, want) in placed.half_extents.iter().zip([0.1, 0.05, 0.2]) {
+            assert!(
+                f64::from(*got) >= want && f64::from(*got) - want < 2e-6,
+                "{placed:?}"
+            );
+        }
+    }
+
+    /// A small tetrahedron at `at`.
+    fn tetra(at: V3, size: f64) -> Vec<V3> {
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ]
+        .iter()
+        .map(|v| add(at, scaled(*v, size)))
+        .collect()
+    }
+
+    #[test]
+    fn merging_keeps_every_part_once_and_joins_neighbours_first() {
+        // Three clusters of small parts far apart: three groups are the
+        // clusters, whatever the parts' order.
+        let mut rng = 3u64;
+        let centres = [[0.0, 0.0, 0.0], [5.0, 0.0, 0.0], [0.0, 5.0, 1.0]];
+        let mut parts = Vec::new();
+        let mut cluster_of = Vec::new();
+        for k in 0..15 {
+            let c = (k * 7) % 3;
+            let jitter = [0, 1, 2].map(|_| lcg(&mut rng) * 0.5);
+            parts.push(tetra(add(centres[c], jitter), 0.1));
+            cluster_of.push(c);
+        }
+        let groups = merge(&parts, 3);
+        assert_eq!(groups.len(), 3);
+        for g in &groups {
+            assert!(
+                g.iter().all(|&p| cluster_of[p] == cluster_of[g[0]]),
+                "{groups:?}"
+            );
+        }
+        for budget in [1, 2, 5, 8, 14, 15, 20] {
+            let groups = merge(&parts, budget);
+            assert_eq!(groups.len(), budget.min(15), "budget {budget}");
+            let mut all: Vec<usize> = groups.concat();
+            all.sort_unstable();
+            assert_eq!(all, (0..15).collect::<Vec<_>>());
+            assert!(groups.iter().all(|g| g.windows(2).all(|w| w[0] < w[1])));
+        }
+        // Many parts (past the pairwise comparison's bound) still end in
+        // the budget, every part once.
+        let many: Vec<Vec<V3>> = (0..300)
+            .map(|k| tetra([k as f64 * 0.3, (k % 7) as f64, 0.0], 0.1))
+            .collect();
+        let groups = merge(&many, 8);
+        assert_eq!(groups.len(), 8);
+        let mut all: Vec<usize> = groups.concat();
+        all.sort_unstable();
+        assert_eq!(all, (0..300).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn a_hulls_volume_is_its_solids() {
+        let id = rotation([0.0; 3]);
+        let cube = cloud_hull(&box_corners([3.0, -2.0, 1.0], &id, [1.0, 2.0, 0.5])).unwrap();
+        assert!((volume(&cube) - 8.0).abs() < 1e-12);
+        let t = cloud_hull(&tetra([1.0, 1.0, 1.0], 2.0)).unwrap();
+        assert!((volume(&t) - 8.0 / 6.0).abs() < 1e-12);
+    }
+}
