@@ -123,6 +123,29 @@ fn pips_payload_bay_mesh_reaches_past_a_bracket_from_an_stl() {
 }
 
 #[test]
+fn panda_shelf_mesh_reaches_into_a_shelf_of_ten_boards_from_one_stl() {
+    use capp_core::Shape;
+    let (problem, t) = runs_and_checks("panda_shelf_mesh.toml", Outcome::Reached);
+    // Ten separate parts, more than a scenario's 8 hulls: each board is a
+    // box, none a hull.
+    assert_eq!(problem.obstacles.len(), 10);
+    assert!(problem.hulls.is_empty());
+    assert!(problem
+        .obstacles
+        .iter()
+        .all(|o| matches!(o.shape, Shape::Cuboid { .. })));
+    assert_eq!(problem.obstacle_names[9], "shelf part 10");
+    // The hand goes in between the boards: the arm comes within the
+    // boards' influence.
+    let closest = t
+        .rows
+        .iter()
+        .filter_map(|r| r.clearance)
+        .fold(f64::INFINITY, f64::min);
+    assert!(closest < 1.0, "closest approach C-1 = {closest}");
+}
+
+#[test]
 fn pips_dead_end_stalls() {
     runs_and_checks("pips_dead_end.toml", Outcome::Stalled);
 }
