@@ -305,3 +305,14 @@ fn the_panda_from_its_urdf_planned_on_the_board_is_the_host_plan() {
     let n = serial_matches_run("panda_table.toml", &elf);
     assert!(n > 5, "{n} setpoints");
 }
+
+/// The Panda reaching into a shelf whose ten boards come from one STL, each
+/// a box obstacle: on the board, the host's plan to the bit.
+#[test]
+fn a_shelf_of_boards_from_one_stl_planned_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("panda_shelf_mesh.toml", &elf);
+    assert!(n > 5, "{n} setpoints");
+}
