@@ -1,17 +1,25 @@
-//! What a CAD mesh's separate parts become on the board (issue 24): boxes
-//! where they are boxes, hulls for the rest, and neighbouring parts merged
-//! into shared hulls when there are more than the scenario has hull slots
-//! for (`capp_core::obstacle::MAX_HULLS`).
+//! What a CAD mesh's separate parts become on the board (issue 24): boxes,
+//! cylinders and balls where they are those, hulls for the rest, and
+//! neighbouring parts merged into shared hulls when there are more than the
+//! scenario has hull slots for (`capp_core::obstacle::MAX_HULLS`).
 //!
 //! A part that is a box (a shelf's board, a plate, a block, a table's leg:
 //! its convex hull has 8 corners, each at a corner of the box its edges
 //! span) is planned as a box obstacle: the same solid, exact, about a third
 //! of a hull's cost a pair on the board (`BENCHMARKS.md`: 119 against 395
 //! M4F instructions a pair in the loop), and it takes no hull slot, so a
-//! shelving unit of a dozen boards loads. [`box_of`] recognises it from the
-//! hull's corners alone and fits the box round them (every corner inside by
-//! construction); [`BoxPart::placed`] places it in the world for the core,
-//! checking that the `f32` box the core builds still holds every corner.
+//! shelving unit of a dozen boards loads. A part whose hull's corners all
+//! lie on a round cylinder (two end faces, every corner nearly one distance
+//! from the axis: a pipe, a drum, a shaft) or on a ball, fine enough that
+//! the solid through its corners reaches at most 2 % of its radius beyond
+//! the hull (16 sides or more), is planned as that cylinder or ball: a CAD
+//! tessellation puts its vertices on the true surface, so the solid through
+//! them is the part as designed, where its hull (or an enclosure of 32
+//! corners, `crate::enclosure`) would take a hull slot and cost 4-6 times
+//! more a pair. [`fit`] recognises each from the hull alone and fits it
+//! round the hull's corners (every corner inside by construction);
+//! [`Fitted::placed`] places it in the world for the core, checking that
+//! the `f32` solid the core builds still holds every corner.
 //!
 //! The other parts are hulls. When more of them than the slots left,
 //! [`merge`] joins them greedily, each time the two groups whose joint hull
@@ -34,45 +42,92 @@ use crate::polytope::{cloud_hull, cross, dot, spread, sub, CloudHull, V3};
 /// (binary STL stores `f32`), far below any modelling detail.
 const BOX_TOLERANCE: f64 = 1e-6;
 
-/// Relative slack on a placed box's half-extents beyond the measured
-/// growth: two `f32` ulps of the box's size and distance from the origin,
-/// for the core's own rounding as it takes a point into the box's frame.
+/// Relative slack on a placed solid's sizes beyond the measured growth: two
+/// `f32` ulps of its size and distance from the origin, for the core's own
+/// rounding as it takes a point into the solid's frame.
 const ROUNDING: f64 = 2.0 * f32::EPSILON as f64;
+
+/// A cylinder or a ball is fitted to a part's hull when every corner is on
+/// it to this fraction of its radius, and it reaches no farther than this
+/// fraction of its radius beyond the hull: a tessellation of 16 sides or
+/// more round (`1 - cos(pi / 16)` = 1.9 %), so a fine CAD mesh of a pipe or
+/// a ball, not a hexagonal bar.
+const ROUND_OVERSHOOT: f64 = 0.02;
 
 /// Most groups [`merge`] compares pairwise (each comparison builds a
 /// hull): more parts than this are first paired off along the mesh's
 /// longest axis, neighbour with neighbour, until they are this few.
 const MAX_COMPARED: usize = 128;
 
-/// A part that is a box, in the part's (the mesh file's) frame.
+/// A primitive a part is, fitted round its hull, in the part's (the mesh
+/// file's) frame.
 #[derive(Clone, Debug, PartialEq)]
-pub struct BoxPart {
-    /// The box's centre, length units.
+pub struct Fitted {
+    /// The solid's centre, length units.
     pub centre: V3,
-    /// Its axes (unit, right-handed): the columns of its rotation.
+    /// Its axes (unit, right-handed), the columns of its rotation: a box's
+    /// edges, a cylinder's axis the third.
     pub axes: [V3; 3],
-    /// Its half-extents along `axes`, length units; every corner of the
-    /// part is within them.
-    pub half_extents: V3,
+    /// What it is and its size.
+    pub form: FitForm,
+    /// How far the solid reaches beyond the part's hull at most, length
+    /// units (0 for a box: it is the hull).
+    pub overshoot: f64,
+    /// The hull's corners: the solid holds each (so the whole part).
+    corners: Vec<V3>,
 }
 
-/// A box placed for the core: the `f32` values an obstacle takes.
+/// The primitive of a [`Fitted`] part, length units.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlacedBox {
+pub enum FitForm {
+    /// A box of these half-extents along the axes.
+    Box {
+        /// Half-extents.
+        half_extents: V3,
+    },
+    /// A round cylinder along the third axis.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Full length.
+        length: f64,
+    },
+    /// A ball.
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+}
+
+/// A fitted part placed for the core: the `f32` values an obstacle takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placed {
     /// World centre, length units.
     pub centre: [f32; 3],
     /// `R = Rz Ry Rx` of these angles (radians, `[rx, ry, rz]`) turns the
-    /// box's frame into the world's.
+    /// solid's frame into the world's.
     pub euler_123: [f32; 3],
-    /// Half-extents, length units.
-    pub half_extents: [f32; 3],
+    /// The core's shape (`Cuboid`, `Cylinder` or `Sphere`).
+    pub shape: capp_core::Shape,
 }
 
-/// The box `points` are, when their convex hull is a box (8 corners, each
-/// at a corner of the box the edges from one of them span, to
-/// [`BOX_TOLERANCE`]); `None` otherwise (or for points that span no volume).
-pub fn box_of(points: &[V3]) -> Option<BoxPart> {
+/// The primitive `points` are, when their convex hull is one: a box (8
+/// corners, each at a corner of the box the edges from one of them span,
+/// to [`BOX_TOLERANCE`]), or a cylinder or a ball through every corner that
+/// reaches at most [`ROUND_OVERSHOOT`] of its radius beyond the hull (a
+/// tessellated CAD cylinder of 16 sides or more, a ball of 16 x 32 facets
+/// or finer); `None` otherwise (or for points that span no volume).
+pub fn fit(points: &[V3]) -> Option<Fitted> {
     let hull = cloud_hull(points).ok()?;
+    box_of(&hull)
+        .or_else(|| cylinder_of(&hull))
+        .or_else(|| sphere_of(&hull))
+}
+
+const IDENTITY: [V3; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// [`fit`]'s box.
+fn box_of(hull: &CloudHull) -> Option<Fitted> {
     let corners = &hull.corners;
     if corners.len() != 8 {
         return None;
@@ -106,7 +161,7 @@ pub fn box_of(points: &[V3]) -> Option<BoxPart> {
             .iter()
             .all(|k| along.iter().filter(|&j| j == k).count() == 1)
     {
-        axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        axes = IDENTITY;
     }
     // Half-extents from the corners themselves: every corner within them.
     let half_extents = axes.map(|a| {
@@ -131,86 +186,209 @@ pub fn box_of(points: &[V3]) -> Option<BoxPart> {
         }
         seen |= 1 << pattern;
     }
-    (seen == u8::MAX).then_some(BoxPart {
+    (seen == u8::MAX).then(|| Fitted {
         centre,
         axes,
-        half_extents,
+        form: FitForm::Box { half_extents },
+        overshoot: 0.0,
+        corners: corners.clone(),
     })
 }
 
-impl BoxPart {
-    /// The box in the world, for a mesh placed at `centre` turned by
-    /// `euler` (radians, `R = Rz Ry Rx`), as the core's `f32` values. A box
-    /// along the mesh's axes keeps the mesh's angles; another's axis called
-    /// x is the one nearest the world's horizontal plane (a box is the same
-    /// whichever of its axes is called x), so its angles are far from the
-    /// `ry = +-90 deg` lock (`|sin ry| <= 1/sqrt 3`).
-    /// The half-extents are grown by what the `f32` rotation and centre move
-    /// the box's corners (measured: the core's own rotation of the rounded
-    /// angles) plus [`ROUNDING`] of its size and distance from the origin,
-    /// so the box the core builds holds every corner of the part.
-    pub fn placed(&self, centre: V3, euler: V3) -> PlacedBox {
+/// [`fit`]'s cylinder: the hull is a prism whose two end faces (the
+/// direction most of its triangles face, a cap's fan) hold every corner,
+/// the corners all at nearly one distance from the axis through their
+/// mean; the cylinder through the farthest. It reaches beyond the hull by
+/// at most its radius less the least distance of a side face's plane from
+/// the axis (the hull holds the cylinder of that radius).
+fn cylinder_of(hull: &CloudHull) -> Option<Fitted> {
+    let corners = &hull.corners;
+    let tolerance = BOX_TOLERANCE * spread(corners);
+    // The normal most triangles share (up to sign): the caps'.
+    let parallel = |a: V3, b: V3| dot(a, b).abs() >= 1.0 - 1e-9;
+    let axis = hull
+        .triangles
+        .iter()
+        .map(|t| {
+            let count = hull
+                .triangles
+                .iter()
+                .filter(|u| parallel(t.normal, u.normal))
+                .count();
+            (count, t.normal)
+        })
+        .max_by_key(|&(count, _)| count)
+        .filter(|&(count, _)| count >= 12)?
+        .1;
+    let along: Vec<f64> = corners.iter().map(|&p| dot(p, axis)).collect();
+    let (lo, hi) = along
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+            (lo.min(t), hi.max(t))
+        });
+    if along
+        .iter()
+        .any(|&t| (t - lo).abs() > tolerance && (t - hi).abs() > tolerance)
+    {
+        return None;
+    }
+    let m = mean(corners);
+    let centre = add(m, scaled(axis, (lo + hi) / 2.0 - dot(m, axis)));
+    let radial = |p: V3| {
+        let d = sub(p, centre);
+        let off = sub(d, scaled(axis, dot(d, axis)));
+        dot(off, off).sqrt()
+    };
+    let radius = corners.iter().map(|&p| radial(p)).fold(0.0, f64::max);
+    let nearest = corners
+        .iter()
+        .map(|&p| radial(p))
+        .fold(f64::INFINITY, f64::min);
+    if nearest < radius * (1.0 - ROUND_OVERSHOOT) {
+        return None;
+    }
+    // The side faces' least distance from the axis.
+    let apothem = hull
+        .triangles
+        .iter()
+        .filter(|t| dot(t.normal, axis).abs() <= 1e-6)
+        .map(|t| t.offset - dot(t.normal, centre))
+        .fold(f64::INFINITY, f64::min);
+    if !apothem.is_finite() {
+        return None;
+    }
+    let overshoot = radius - apothem.min(radius);
+    if overshoot > ROUND_OVERSHOOT * radius {
+        return None;
+    }
+    // Axes: the cylinder's along the mesh's z keeps the mesh's placement;
+    // else x level (square to the axis and to the mesh's z).
+    let axes = if axis[2].abs() >= 1.0 - 1e-12 {
+        IDENTITY
+    } else {
+        let x = unit(cross(axis, [0.0, 0.0, 1.0]))?;
+        [x, cross(axis, x), axis]
+    };
+    Some(Fitted {
+        centre,
+        axes,
+        form: FitForm::Cylinder {
+            radius,
+            length: hi - lo,
+        },
+        overshoot,
+        corners: corners.clone(),
+    })
+}
+
+/// [`fit`]'s ball: every corner at nearly one distance from their mean,
+/// the ball through the farthest; it reaches beyond the hull by at most its
+/// radius less the least distance of a face's plane from its centre.
+fn sphere_of(hull: &CloudHull) -> Option<Fitted> {
+    let corners = &hull.corners;
+    let centre = mean(corners);
+    let distance = |p: V3| {
+        let d = sub(p, centre);
+        dot(d, d).sqrt()
+    };
+    let radius = corners.iter().map(|&p| distance(p)).fold(0.0, f64::max);
+    let nearest = corners
+        .iter()
+        .map(|&p| distance(p))
+        .fold(f64::INFINITY, f64::min);
+    if nearest < radius * (1.0 - ROUND_OVERSHOOT) {
+        return None;
+    }
+    let inner = hull
+        .triangles
+        .iter()
+        .map(|t| t.offset - dot(t.normal, centre))
+        .fold(f64::INFINITY, f64::min);
+    let overshoot = radius - inner.min(radius);
+    (overshoot <= ROUND_OVERSHOOT * radius).then(|| Fitted {
+        centre,
+        axes: IDENTITY,
+        form: FitForm::Sphere { radius },
+        overshoot,
+        corners: corners.clone(),
+    })
+}
+
+impl Fitted {
+    /// The solid in the world, for a mesh placed at `centre` turned by
+    /// `euler` (radians, `R = Rz Ry Rx`), as the core's `f32` values. A
+    /// solid along the mesh's axes keeps the mesh's angles (a ball takes
+    /// none); another box's axis called x is the one nearest the world's
+    /// horizontal plane (a box is the same whichever of its axes is called
+    /// x), and another cylinder's x is level, so the angles are far from
+    /// the `ry = +-90 deg` lock (`|sin ry| <= 1/sqrt 3`). The sizes are
+    /// grown by what the `f32` angles and centre move the hull's corners
+    /// (measured: the core's own rotation of the rounded angles) plus
+    /// [`ROUNDING`] of the solid's size and distance from the origin, so the
+    /// solid the core builds holds every corner of the part.
+    pub fn placed(&self, centre: V3, euler: V3) -> Placed {
         let rotation = crate::geometry::rotation(euler);
         let turn = |a: V3| -> V3 { [0, 1, 2].map(|i| dot(rotation[i], a)) };
         let world_centre = add(centre, turn(self.centre));
         let world_axes = self.axes.map(turn);
-        let (order, euler) = if self.axes == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
-            // Along the mesh's axes: its own placement.
-            ([0, 1, 2], euler)
-        } else {
-            // The cyclic order (right-handed) whose x is most level.
-            let first = (0..3)
-                .min_by(|&a, &b| world_axes[a][2].abs().total_cmp(&world_axes[b][2].abs()))
-                .unwrap_or(0);
-            let order = [first, (first + 1) % 3, (first + 2) % 3];
-            let (x, y, z) = (
-                world_axes[order[0]],
-                world_axes[order[1]],
-                world_axes[order[2]],
-            );
-            // R's columns are x, y, z: R[2][0] = x_z = -sin ry, R[2][1] = y_z
-            // = cos ry sin rx, R[2][2] = z_z, R[1][0] = x_y = sin rz cos ry,
-            // R[0][0] = x_x.
-            let angles = [
-                libm::atan2(y[2], z[2]),
-                libm::asin((-x[2]).clamp(-1.0, 1.0)),
-                libm::atan2(x[1], x[0]),
-            ];
-            (order, angles)
+        let mut order = [0, 1, 2];
+        let angles = match self.form {
+            FitForm::Sphere { .. } => [0.0; 3],
+            _ if self.axes == IDENTITY => euler,
+            form => {
+                if let FitForm::Box { .. } = form {
+                    // The cyclic order (right-handed) whose x is most level.
+                    let first = (0..3)
+                        .min_by(|&a, &b| world_axes[a][2].abs().total_cmp(&world_axes[b][2].abs()))
+                        .unwrap_or(0);
+                    order = [first, (first + 1) % 3, (first + 2) % 3];
+                }
+                let [x, y, z] = order.map(|k| world_axes[k]);
+                // R's columns are x, y, z: R[2][0] = x_z = -sin ry, R[2][1]
+                // = y_z = cos ry sin rx, R[2][2] = z_z, R[1][0] = x_y = sin
+                // rz cos ry, R[0][0] = x_x.
+                [
+                    libm::atan2(y[2], z[2]),
+                    libm::asin((-x[2]).clamp(-1.0, 1.0)),
+                    libm::atan2(x[1], x[0]),
+                ]
+            }
         };
-        let (x, y, z) = (
-            world_axes[order[0]],
-            world_axes[order[1]],
-            world_axes[order[2]],
-        );
-        let half = order.map(|k| self.half_extents[k]);
-        let euler_123 = euler.map(|a| a as f32);
+        let euler_123 = angles.map(|a| a as f32);
         let centre_f32 = world_centre.map(|c| c as f32);
-        // Every corner of the box, where the f32 box must hold it.
+        // Each corner of the hull in the f32 solid's frame.
         let r = capp_core::math::rotation_123(euler_123[0], euler_123[1], euler_123[2]);
-        let mut grown = half;
-        for pattern in 0..8u8 {
-            let mut corner = world_centre;
-            for (k, axis) in [x, y, z].iter().enumerate() {
-                let s = if pattern >> k & 1 == 1 {
-                    half[k]
-                } else {
-                    -half[k]
-                };
-                corner = add(corner, scaled(*axis, s));
+        let local: Vec<V3> = self
+            .corners
+            .iter()
+            .map(|&p| {
+                let world = add(centre, turn(p));
+                let d = [0, 1, 2].map(|i| world[i] - f64::from(centre_f32[i]));
+                [0, 1, 2].map(|k| (0..3).map(|i| f64::from(r[(i, k)]) * d[i]).sum())
+            })
+            .collect();
+        let largest = |f: &dyn Fn(&V3) -> f64| local.iter().map(f).fold(0.0, f64::max);
+        let far = world_centre.iter().fold(0.0, |m: f64, &c| m.max(c.abs()));
+        let grow = |size: f64, need: f64| round_up(size.max(need) + ROUNDING * (size + far));
+        let shape = match self.form {
+            FitForm::Box { half_extents } => {
+                let half = order.map(|k| half_extents[k]);
+                capp_core::Shape::Cuboid {
+                    half_extents: [0, 1, 2].map(|k| grow(half[k], largest(&|l| l[k].abs()))),
+                }
             }
-            let d = [0, 1, 2].map(|i| corner[i] - f64::from(centre_f32[i]));
-            for (k, g) in grown.iter_mut().enumerate() {
-                let local: f64 = (0..3).map(|i| f64::from(r[(i, k)]) * d[i]).sum();
-                *g = g.max(local.abs());
-            }
-        }
-        let size = half.iter().fold(0.0, |m: f64, &h| m.max(h));
-        let slack = ROUNDING * (size + world_centre.iter().fold(0.0, |m: f64, &c| m.max(c.abs())));
-        PlacedBox {
+            FitForm::Cylinder { radius, length } => capp_core::Shape::Cylinder {
+                radius: grow(radius, largest(&|l| (l[0] * l[0] + l[1] * l[1]).sqrt())),
+                length: 2.0 * grow(length / 2.0, largest(&|l| l[2].abs())),
+            },
+            FitForm::Sphere { radius } => capp_core::Shape::Sphere {
+                radius: grow(radius, largest(&|l| dot(*l, *l).sqrt())),
+            },
+        };
+        Placed {
             centre: centre_f32,
             euler_123,
-            half_extents: grown.map(|g| round_up(g + slack)),
+            shape,
         }
     }
 }
@@ -411,6 +589,35 @@ mod tests {
         rotation([0, 1, 2].map(|_| (lcg(rng) - 0.5) * 7.0))
     }
 
+    /// Whether world point `x` is in the solid the core builds of `placed`
+    /// (its f32 rotation, centre and sizes).
+    fn holds(placed: &Placed, x: V3) -> bool {
+        let [ex, ey, ez] = placed.euler_123;
+        let r = capp_core::math::rotation_123(ex, ey, ez);
+        let d = [0, 1, 2].map(|i| x[i] - f64::from(placed.centre[i]));
+        let l: [f64; 3] = [0, 1, 2].map(|k| (0..3).map(|i| f64::from(r[(i, k)]) * d[i]).sum());
+        match placed.shape {
+            capp_core::Shape::Cuboid { half_extents } => {
+                (0..3).all(|k| l[k].abs() <= f64::from(half_extents[k]))
+            }
+            capp_core::Shape::Cylinder { radius, length } => {
+                (l[0] * l[0] + l[1] * l[1]).sqrt() <= f64::from(radius)
+                    && l[2].abs() <= f64::from(length) / 2.0
+            }
+            capp_core::Shape::Sphere { radius } => dot(l, l).sqrt() <= f64::from(radius),
+            _ => false,
+        }
+    }
+
+    /// `points` placed by a mesh frame at `origin` turned by `angles`.
+    fn in_world(points: &[V3], origin: V3, angles: V3) -> Vec<V3> {
+        let frame = rotation(angles);
+        points
+            .iter()
+            .map(|p| add(origin, [0, 1, 2].map(|i| dot(frame[i], *p))))
+            .collect()
+    }
+
     #[test]
     fn turned_boxes_of_any_size_are_recognised_and_the_core_box_holds_them() {
         let mut rng = 11u64;
@@ -423,8 +630,12 @@ mod tests {
             // Mesh vertices on its faces and edges are not corners.
             points.push(add(centre, [0, 1, 2].map(|i| r[i][0] * half[0])));
             points.push(centre);
-            let part = box_of(&points).unwrap_or_else(|| panic!("case {case}: not a box"));
-            let mut got = part.half_extents;
+            let part = fit(&points).unwrap_or_else(|| panic!("case {case}: not a box"));
+            let FitForm::Box { half_extents } = part.form else {
+                panic!("case {case}: {part:?}");
+            };
+            assert_eq!(part.overshoot, 0.0);
+            let mut got = half_extents;
             got.sort_by(f64::total_cmp);
             let mut want = half;
             want.sort_by(f64::total_cmp);
@@ -437,25 +648,11 @@ mod tests {
             // Placed by a turned, moved mesh frame: the core's f32 box
             // holds every corner, and is no more than a little larger.
             let angles = [0, 1, 2].map(|_| (lcg(&mut rng) - 0.5) * 7.0);
-            let frame = rotation(angles);
             let origin = [0, 1, 2].map(|_| scale * 50.0 * (lcg(&mut rng) - 0.5));
             let placed = part.placed(origin, angles);
             assert!(placed.euler_123[1].abs() <= 0.62, "case {case}: {placed:?}");
-            let r32 = capp_core::math::rotation_123(
-                placed.euler_123[0],
-                placed.euler_123[1],
-                placed.euler_123[2],
-            );
-            for p in &points {
-                let world = add(origin, [0, 1, 2].map(|i| dot(frame[i], *p)));
-                let d = [0, 1, 2].map(|i| world[i] - f64::from(placed.centre[i]));
-                for k in 0..3 {
-                    let local: f64 = (0..3).map(|i| f64::from(r32[(i, k)]) * d[i]).sum();
-                    assert!(
-                        local.abs() <= f64::from(placed.half_extents[k]),
-                        "case {case}: outside"
-                    );
-                }
+            for x in in_world(&points, origin, angles) {
+                assert!(holds(&placed, x), "case {case}: outside");
             }
             let spread = 1e-5
                 * (scale
@@ -463,7 +660,10 @@ mod tests {
                         .iter()
                         .chain(&centre)
                         .fold(0.0, |m: f64, c| m.max(c.abs())));
-            let mut placed_half = placed.half_extents.map(f64::from);
+            let capp_core::Shape::Cuboid { half_extents } = placed.shape else {
+                panic!("case {case}: {placed:?}");
+            };
+            let mut placed_half = half_extents.map(f64::from);
             placed_half.sort_by(f64::total_cmp);
             for k in 0..3 {
                 assert!(
@@ -497,7 +697,7 @@ mod tests {
         // One corner moved out by a thousandth.
         let mut dented = cube.clone();
         dented[5] = dented[5].map(|x| x * 1.001);
-        // An L-shaped prism (10 hull corners) and a tetrahedron.
+        // A tetrahedron, and a square (no volume).
         let tetra = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let flat: Vec<V3> = cube.iter().map(|p| [p[0], p[1], 0.0]).collect();
         for (name, points) in [
@@ -507,20 +707,20 @@ mod tests {
             ("tetrahedron", tetra),
             ("flat", flat),
         ] {
-            assert_eq!(box_of(&points), None, "{name}");
+            assert_eq!(fit(&points), None, "{name}");
         }
-        assert!(box_of(&cube).is_some());
+        assert!(fit(&cube).is_some());
     }
 
     #[test]
-    fn a_box_along_the_meshs_axes_keeps_its_placement() {
+    fn a_solid_along_the_meshs_axes_keeps_its_placement() {
         let id = rotation([0.0; 3]);
-        let part = box_of(&box_corners([0.5, -0.25, 2.0], &id, [0.1, 0.05, 0.2])).unwrap();
-        assert_eq!(
-            part.axes,
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-        );
-        for (got, want) in part.half_extents.iter().zip([0.1, 0.05, 0.2]) {
+        let part = fit(&box_corners([0.5, -0.25, 2.0], &id, [0.1, 0.05, 0.2])).unwrap();
+        assert_eq!(part.axes, IDENTITY);
+        let FitForm::Box { half_extents } = part.form else {
+            panic!("{part:?}");
+        };
+        for (got, want) in half_extents.iter().zip([0.1, 0.05, 0.2]) {
             assert!((got - want).abs() < 1e-12, "{part:?}");
         }
         let euler = [0.1, -1.5, 3.0];
@@ -531,10 +731,116 @@ mod tests {
             let world = 1.0 + k as f64 + dot(*row, [0.5, -0.25, 2.0]);
             assert!((f64::from(placed.centre[k]) - world).abs() < 1e-6);
         }
-        for (got, want) in placed.half_extents.iter().zip([0.1, 0.05, 0.2]) {
+        let capp_core::Shape::Cuboid { half_extents } = placed.shape else {
+            panic!("{placed:?}");
+        };
+        for (got, want) in half_extents.iter().zip([0.1, 0.05, 0.2]) {
             assert!(
                 f64::from(*got) >= want && f64::from(*got) - want < 2e-6,
                 "{placed:?}"
+            );
+        }
+        // A drum along the mesh's z too.
+        let drum = prism(32, 0.1, 0.1, 0.3, &id, [0.0, 0.0, 1.0]);
+        let part = fit(&drum).unwrap();
+        assert_eq!(part.axes, IDENTITY);
+        assert_eq!(
+            part.placed([0.0; 3], euler).euler_123,
+            euler.map(|a| a as f32)
+        );
+    }
+
+    /// The corners of a prism of `sides` round an ellipse of semi-axes
+    /// `(a, b)`, `length` long, about `centre` turned by `r`.
+    fn prism(sides: usize, a: f64, b: f64, length: f64, r: &[[f64; 3]; 3], centre: V3) -> Vec<V3> {
+        let mut points = Vec::new();
+        for k in 0..sides {
+            let t = std::f64::consts::TAU * k as f64 / sides as f64;
+            for z in [-length / 2.0, length / 2.0] {
+                let local = [a * t.cos(), b * t.sin(), z];
+                points.push(add(centre, [0, 1, 2].map(|i| dot(r[i], local))));
+            }
+        }
+        points
+    }
+
+    #[test]
+    fn fine_drums_and_balls_are_cylinders_and_balls_through_their_corners() {
+        let mut rng = 5u64;
+        for case in 0..120 {
+            let scale = 10f64.powf(lcg(&mut rng) * 4.0 - 2.0);
+            let radius = scale * (0.05 + lcg(&mut rng));
+            let length = scale * (0.05 + 3.0 * lcg(&mut rng));
+            let sides = 16 + (lcg(&mut rng) * 60.0) as usize;
+            let r = random_rotation(&mut rng);
+            let centre = [0, 1, 2].map(|_| scale * 10.0 * (lcg(&mut rng) - 0.5));
+            let points = prism(sides, radius, radius, length, &r, centre);
+            let part = fit(&points).unwrap_or_else(|| panic!("case {case}: {sides} sides"));
+            let FitForm::Cylinder {
+                radius: got,
+                length: long,
+            } = part.form
+            else {
+                panic!("case {case}: {part:?}");
+            };
+            assert!((got - radius).abs() <= 1e-9 * radius, "case {case}");
+            assert!((long - length).abs() <= 1e-9 * scale, "case {case}");
+            let sagitta = radius * (1.0 - (std::f64::consts::PI / sides as f64).cos());
+            assert!(
+                (part.overshoot - sagitta).abs() <= 1e-9 * radius,
+                "case {case}"
+            );
+            let angles = [0, 1, 2].map(|_| (lcg(&mut rng) - 0.5) * 7.0);
+            let origin = [0, 1, 2].map(|_| scale * 30.0 * (lcg(&mut rng) - 0.5));
+            let placed = part.placed(origin, angles);
+            for x in in_world(&points, origin, angles) {
+                assert!(holds(&placed, x), "case {case}: outside");
+            }
+        }
+        // Too coarse to be a cylinder (a hexagonal or 12-sided bar), or not
+        // round (an elliptic drum): no primitive.
+        let id = rotation([0.0; 3]);
+        for (sides, b) in [(6, 1.0), (12, 1.0), (15, 1.0), (40, 0.8)] {
+            assert_eq!(
+                fit(&prism(sides, 1.0, b, 2.0, &id, [0.0; 3])),
+                None,
+                "{sides} {b}"
+            );
+        }
+        // Balls: latitude rings and poles.
+        let ball = |rings: usize, segments: usize, squash: f64| {
+            let mut points = vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+            for i in 1..rings {
+                let polar = std::f64::consts::PI * i as f64 / rings as f64;
+                for k in 0..segments {
+                    let t = std::f64::consts::TAU * k as f64 / segments as f64;
+                    points.push([
+                        polar.sin() * t.cos() * squash,
+                        polar.sin() * t.sin(),
+                        polar.cos(),
+                    ]);
+                }
+            }
+            points
+        };
+        let part = fit(&ball(24, 48, 1.0)).unwrap();
+        let FitForm::Sphere { radius } = part.form else {
+            panic!("{part:?}");
+        };
+        assert!(
+            (radius - 1.0).abs() < 1e-9 && part.overshoot < 0.02,
+            "{part:?}"
+        );
+        let placed = part.placed([3.0, -2.0, 1.0], [0.3, 0.2, 0.1]);
+        assert_eq!(placed.euler_123, [0.0; 3]);
+        for x in in_world(&ball(24, 48, 1.0), [3.0, -2.0, 1.0], [0.3, 0.2, 0.1]) {
+            assert!(holds(&placed, x));
+        }
+        for (rings, segments, squash) in [(8, 16, 1.0), (24, 48, 0.9)] {
+            assert_eq!(
+                fit(&ball(rings, segments, squash)),
+                None,
+                "{rings} {squash}"
             );
         }
     }

@@ -1,6 +1,6 @@
 //! Convex hull obstacles in scenario files (`shape = "convex"` with
 //! `vertices`, `shape = "mesh"` with an STL or OBJ file): each loads as its
-//! hull's corners (a mesh of separate parts as a solid per part: a box where the part is one, hulls shared by neighbouring parts beyond the hull slots), the checker's exact f64 distance agrees with the core's
+//! hull's corners (a mesh of separate parts as a solid per part: a box, a cylinder or a ball where the part is one, hulls shared by neighbouring parts beyond the hull slots), the checker's exact f64 distance agrees with the core's
 //! GJK and with `shape = "box"`, every bad hull gets a one-line error naming
 //! the file and the obstacle's line (exit 2, no output folder), and a hull
 //! scenario plans end to end with the checker accepting it.
@@ -758,11 +758,11 @@ fn mesh_parts_errors_are_one_line_at_the_obstacle() {
         e.contains(&format!("{line}")) && e.contains("`parts` is \"separate\" or \"one\""),
         "{e}"
     );
-    // A 20-sided prism (40 corners) beside a box: that part is planned
-    // round an enclosure of 32 corners, and the note names it.
+    // A 20-sided elliptic prism (40 corners) beside a box: that part is
+    // planned round an enclosure of 32 corners, and the note names it.
     let ring = |k: usize, z: f32| {
         let a = std::f32::consts::TAU * (k % 20) as f32 / 20.0;
-        [0.1 * a.cos(), 0.1 * a.sin(), z]
+        [0.1 * a.cos(), 0.08 * a.sin(), z]
     };
     let mut prism = Vec::new();
     for k in 0..20 {
@@ -846,12 +846,13 @@ fn the_arm_reaches_between_a_meshs_parts_and_not_into_one_hull_round_them() {
     );
 }
 
-/// A closed cylinder round z of `sides` sides (radius `r`, half-height
-/// `h`), as triangles: a curved CAD part, its hull `2 sides` corners.
-fn drum_triangles(sides: usize, r: f32, h: f32) -> Vec<[[f32; 3]; 3]> {
+/// A closed drum round z of `sides` sides (semi-axes `rx`, `ry`: a round
+/// cylinder when equal; half-height `h`), as triangles: a curved CAD part,
+/// its hull `2 sides` corners.
+fn drum_triangles(sides: usize, rx: f32, ry: f32, h: f32) -> Vec<[[f32; 3]; 3]> {
     let ring = |k: usize, z: f32| {
         let a = std::f32::consts::TAU * (k % sides) as f32 / sides as f32;
-        [r * a.cos(), r * a.sin(), z]
+        [rx * a.cos(), ry * a.sin(), z]
     };
     let mut triangles = Vec::new();
     for k in 0..sides {
@@ -869,13 +870,14 @@ fn drum_triangles(sides: usize, r: f32, h: f32) -> Vec<[[f32; 3]; 3]> {
 
 #[test]
 fn a_curved_part_beyond_the_corner_budget_is_planned_round_an_enclosure_that_holds_it() {
-    // A drum of 64 sides (a hull of 128 corners, four times what a hull
-    // may have) in the planar arm's way: the loader encloses it in at most
-    // 32 corners and says so, every point of the part is inside the
-    // enclosure (the checker's own faces of it), `capp run` prints the note
-    // and reaches the target round it, and `capp check` accepts the run.
+    // An elliptic drum of 64 sides (a hull of 128 corners, four times what
+    // a hull may have; not round, so no cylinder) in the planar arm's way:
+    // the loader encloses it in at most 32 corners and says so, every point
+    // of the part is inside the enclosure (the checker's own faces of it),
+    // `capp run` prints the note and reaches the target round it, and
+    // `capp check` accepts the run.
     let dir = tempfile::tempdir().unwrap();
-    let triangles = drum_triangles(64, 0.1, 0.2);
+    let triangles = drum_triangles(64, 0.1, 0.08, 0.2);
     std::fs::write(dir.path().join("drum.stl"), binary_stl(&triangles)).unwrap();
     let path = write(
         dir.path(),
@@ -922,5 +924,90 @@ fn a_curved_part_beyond_the_corner_budget_is_planned_round_an_enclosure_that_hol
         "{stdout}"
     );
     assert!(stdout.contains("outcome:           reached"), "{stdout}");
+    common::check_accepts(&out);
+}
+
+#[test]
+fn a_round_drum_and_a_fine_ball_from_cad_are_a_cylinder_and_a_ball() {
+    // A 64-sided drum (radius 0.1, turned in its file: its axis along x)
+    // and a ball of 24 x 48 facets (radius 0.05) in one STL: a cylinder and
+    // a ball through their corners, no hull slot, each with a note of how
+    // far it reaches beyond the part's hull; every vertex inside (the
+    // checker's geometry); the arm reaches round them and `capp check`
+    // accepts the run.
+    let dir = tempfile::tempdir().unwrap();
+    let mut triangles: Vec<[[f32; 3]; 3]> = drum_triangles(64, 0.1, 0.1, 0.2)
+        .iter()
+        .map(|t| t.map(|v| [v[2], v[1], -v[0]]))
+        .collect();
+    let point = |i: usize, k: usize| {
+        let polar = std::f32::consts::PI * i as f32 / 24.0;
+        let t = std::f32::consts::TAU * (k % 48) as f32 / 48.0;
+        [
+            0.4 + 0.05 * polar.sin() * t.cos(),
+            0.05 * polar.sin() * t.sin(),
+            0.05 * polar.cos(),
+        ]
+    };
+    for i in 0..24 {
+        for k in 0..48 {
+            let (a, b) = (point(i, k), point(i, k + 1));
+            let (c, d) = (point(i + 1, k), point(i + 1, k + 1));
+            triangles.extend([[a, c, d], [a, d, b]]);
+        }
+    }
+    std::fs::write(dir.path().join("drum_ball.stl"), binary_stl(&triangles)).unwrap();
+    let path = write(
+        dir.path(),
+        "cell.toml",
+        &format!(
+            "{}\n[[obstacles]]\nname = \"drum\"\nshape = \"mesh\"\nmesh = \"drum_ball.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n",
+            head()
+        ),
+    );
+    let p = Problem::load(&path).unwrap();
+    assert!(p.hulls.is_empty());
+    let Shape::Cylinder { radius, length } = p.obstacles[0].shape else {
+        panic!("{:?}", p.obstacles[0]);
+    };
+    assert!(
+        (radius - 0.1).abs() < 1e-5 && (length - 0.4).abs() < 1e-5,
+        "{radius} {length}"
+    );
+    let Shape::Sphere { radius } = p.obstacles[1].shape else {
+        panic!("{:?}", p.obstacles[1]);
+    };
+    assert!((radius - 0.05).abs() < 1e-5, "{radius}");
+    let line = head().lines().count() + 2;
+    assert_eq!(p.notes.len(), 2, "{:?}", p.notes);
+    assert!(
+        p.notes[0].starts_with(&format!("obstacle \"drum part 1\" (line {line}): its hull's corners lie on a cylinder: planned as a cylinder through them, at most 0.00012 m beyond")),
+        "{:?}",
+        p.notes
+    );
+    assert!(
+        p.notes[1].contains("lie on a ball: planned as a ball"),
+        "{:?}",
+        p.notes
+    );
+    // Every vertex of both parts in (or on) its solid.
+    let frame = capp_sim::geometry::rotation([0.0, 0.0, 20f64.to_radians()]);
+    for (k, t) in triangles.iter().enumerate() {
+        let obstacle = usize::from(k >= 256);
+        for v in t {
+            let v = v.map(f64::from);
+            let world = [0, 1, 2].map(|i| {
+                [0.65, 0.35, 0.0][i] + frame[i].iter().zip(v).map(|(r, x)| r * x).sum::<f64>()
+            });
+            let d = world_distance(&p, obstacle, world);
+            assert!(d <= 1e-6, "a vertex outside obstacle {obstacle}: {d}");
+        }
+    }
+    let out = dir.path().join("run");
+    let stdout = common::run_rendered(&path, &out);
+    assert!(
+        stdout.contains("its hull's corners lie on a cylinder"),
+        "{stdout}"
+    );
     common::check_accepts(&out);
 }

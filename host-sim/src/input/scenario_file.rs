@@ -21,7 +21,7 @@ use capp_core::{
 };
 
 use crate::enclosure::{enclose, Enclosure};
-use crate::mesh_parts::{box_of, merge, PlacedBox};
+use crate::mesh_parts::{fit, merge, FitForm, Placed};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -384,7 +384,7 @@ fn mesh_hull(points: &[[f64; 3]]) -> Result<Enclosure, NoHull> {
     enclose(points, MAX_HULL_VERTICES).map_err(NoHull::Points)
 }
 
-/// What one obstacle entry becomes: a box or a hull, made of these parts
+/// What one obstacle entry becomes: a primitive or a hull, made of these parts
 /// of its mesh (0-based; empty for a `convex` entry).
 struct Piece {
     parts: Vec<usize>,
@@ -392,19 +392,22 @@ struct Piece {
 }
 
 enum Form {
-    /// A mesh part that is a box ([`crate::mesh_parts`]).
-    Box(PlacedBox),
+    /// A mesh part that is a box, a cylinder or a ball
+    /// ([`crate::mesh_parts`]), and the note when it reaches beyond the
+    /// part's hull.
+    Solid(Placed, Option<String>),
     /// A hull's corners, and the note when they enclose the part's hull.
     Hull(Vec<[f32; 3]>, Option<String>),
 }
 
 /// The pieces of a mesh's `parts` (already scaled), and a note when parts
 /// were merged. With `separate` and every part spanning a volume of its
-/// own (a closed part): each part that is a box a box, each other part a
-/// hull, and when those are more than `slots` (the hull slots this
-/// obstacle may take), neighbouring ones merged into `slots` hulls. Else
-/// (`parts = "one"`, or an open surface such as a mesh of loose faces,
-/// whose parts are flat) one piece round them all, a box if it is one.
+/// own (a closed part): each part that is a box, a cylinder or a ball
+/// ([`fit`]) that solid, each other part a hull, and when those are more
+/// than `slots` (the hull slots this obstacle may take), neighbouring ones
+/// merged into `slots` hulls. Else (`parts = "one"`, or an open surface
+/// such as a mesh of loose faces, whose parts are flat) one piece round
+/// them all, a primitive if it is one.
 /// `placement` is the mesh's centre and Euler angles, radians (for the
 /// boxes).
 fn mesh_pieces(
@@ -425,11 +428,25 @@ fn mesh_pieces(
             form: Form::Hull(as_f32(&hull.corners), note),
         })
     };
-    let piece = |parts: Vec<usize>, points: &[[f64; 3]]| match box_of(points) {
-        Some(b) => Ok(Piece {
+    let solid = |parts: Vec<usize>, f: &crate::mesh_parts::Fitted| {
+        let note = (f.overshoot > 0.0).then(|| {
+            let what = match f.form {
+                FitForm::Cylinder { .. } => "a cylinder",
+                FitForm::Sphere { .. } => "a ball",
+                FitForm::Box { .. } => "a box",
+            };
+            format!(
+                "its hull's corners lie on {what}: planned as {what} through them, at most {} {unit} beyond the part's own hull",
+                two_digits(f.overshoot)
+            )
+        });
+        Piece {
             parts,
-            form: Form::Box(b.placed(placement.0, placement.1)),
-        }),
+            form: Form::Solid(f.placed(placement.0, placement.1), note),
+        }
+    };
+    let piece = |parts: Vec<usize>, points: &[[f64; 3]]| match fit(points) {
+        Some(f) => Ok(solid(parts, &f)),
         None => hull_piece(parts, points),
     };
     if !(separate && parts.len() > 1 && parts.iter().all(|p| closed(p))) {
@@ -439,11 +456,8 @@ fn mesh_pieces(
     let mut pieces = Vec::new();
     let mut rest = Vec::new();
     for (k, part) in parts.iter().enumerate() {
-        match box_of(part) {
-            Some(b) => pieces.push(Piece {
-                parts: vec![k],
-                form: Form::Box(b.placed(placement.0, placement.1)),
-            }),
+        match fit(part) {
+            Some(f) => pieces.push(solid(vec![k], &f)),
             None => rest.push(k),
         }
     }
@@ -480,15 +494,25 @@ fn mesh_pieces(
     Ok((pieces, note))
 }
 
+/// `x` (not negative) to two significant digits, in plain decimals (a
+/// note's lengths run from microns to metres).
+fn two_digits(x: f64) -> String {
+    if x <= 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let decimals = (1 - x.log10().floor() as i32).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
 /// What the notes say of a mesh part planned round an enclosure instead of
 /// its hull (`None` when it is its hull).
 fn enclosure_note(e: &Enclosure, unit: &str) -> Option<String> {
     (!e.is_exact()).then(|| {
         format!(
-            "its hull has {} corners, more than the {MAX_HULL_VERTICES} a hull may have: planned round an enclosing hull of {} corners, at most {:.3} {unit} beyond the part's own hull",
+            "its hull has {} corners, more than the {MAX_HULL_VERTICES} a hull may have: planned round an enclosing hull of {} corners, at most {} {unit} beyond the part's own hull",
             e.hull_corners,
             e.corners.len(),
-            e.overshoot
+            two_digits(e.overshoot)
         )
     })
 }
@@ -1263,13 +1287,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 s.name.clone()
             };
             match piece.form {
-                Form::Box(b) => obstacles.push(Solid {
-                    centre: b.centre,
-                    euler_123: b.euler_123,
-                    shape: Shape::Cuboid {
-                        half_extents: b.half_extents,
-                    },
-                }),
+                Form::Solid(placed, note) => {
+                    obstacles.push(Solid {
+                        centre: placed.centre,
+                        euler_123: placed.euler_123,
+                        shape: placed.shape,
+                    });
+                    if let Some(note) = note {
+                        notes.push(format!("{}: {note}", who(&name, obstacles.len() - 1)));
+                    }
+                }
                 Form::Hull(corners, note) => {
                     hulls.push(corners);
                     obstacles.push(solid(Shape::Convex {
