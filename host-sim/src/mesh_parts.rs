@@ -54,6 +54,10 @@ const ROUNDING: f64 = 2.0 * f32::EPSILON as f64;
 /// a ball, not a hexagonal bar.
 const ROUND_OVERSHOOT: f64 = 0.02;
 
+/// The most sides a drum [`fit`] tries as a cylinder has (its hull's
+/// triangles are compared pairwise to find the end faces).
+const MAX_CYLINDER_SIDES: usize = 512;
+
 /// Most groups [`merge`] compares pairwise (each comparison builds a
 /// hull): more parts than this are first paired off along the mesh's
 /// longest axis, neighbour with neighbour, until they are this few.
@@ -203,6 +207,10 @@ fn box_of(hull: &CloudHull) -> Option<Fitted> {
 /// the axis (the hull holds the cylinder of that radius).
 fn cylinder_of(hull: &CloudHull) -> Option<Fitted> {
     let corners = &hull.corners;
+    // Two triangles compared for each pair: a drum of 512 sides at most.
+    if corners.len() > 2 * MAX_CYLINDER_SIDES {
+        return None;
+    }
     let tolerance = BOX_TOLERANCE * spread(corners);
     // The normal most triangles share (up to sign): the caps'.
     let parallel = |a: V3, b: V3| dot(a, b).abs() >= 1.0 - 1e-9;
