@@ -247,28 +247,13 @@ fn cylinder_of(hull: &CloudHull) -> Option<Fitted> {
         let off = sub(d, scaled(axis, dot(d, axis)));
         dot(off, off).sqrt()
     };
-    let radius = corners.iter().map(|&p| radial(p)).fold(0.0, f64::max);
-    let nearest = corners
-        .iter()
-        .map(|&p| radial(p))
-        .fold(f64::INFINITY, f64::min);
-    if nearest < radius * (1.0 - ROUND_OVERSHOOT) {
-        return None;
-    }
-    // The side faces' least distance from the axis.
-    let apothem = hull
+    // The side faces' distances from the axis.
+    let sides = hull
         .triangles
         .iter()
         .filter(|t| dot(t.normal, axis).abs() <= 1e-6)
-        .map(|t| t.offset - dot(t.normal, centre))
-        .fold(f64::INFINITY, f64::min);
-    if !apothem.is_finite() {
-        return None;
-    }
-    let overshoot = radius - apothem.min(radius);
-    if overshoot > ROUND_OVERSHOOT * radius {
-        return None;
-    }
+        .map(|t| t.offset - dot(t.normal, centre));
+    let (radius, overshoot) = round_through(corners, radial, sides)?;
     // Axes: the cylinder's along the mesh's z keeps the mesh's placement;
     // else x level (square to the axis and to the mesh's z).
     let axes = if axis[2].abs() >= 1.0 - 1e-12 {
@@ -299,27 +284,43 @@ fn sphere_of(hull: &CloudHull) -> Option<Fitted> {
         let d = sub(p, centre);
         dot(d, d).sqrt()
     };
-    let radius = corners.iter().map(|&p| distance(p)).fold(0.0, f64::max);
-    let nearest = corners
-        .iter()
-        .map(|&p| distance(p))
-        .fold(f64::INFINITY, f64::min);
-    if nearest < radius * (1.0 - ROUND_OVERSHOOT) {
-        return None;
-    }
-    let inner = hull
+    let faces = hull
         .triangles
         .iter()
-        .map(|t| t.offset - dot(t.normal, centre))
-        .fold(f64::INFINITY, f64::min);
-    let overshoot = radius - inner.min(radius);
-    (overshoot <= ROUND_OVERSHOOT * radius).then(|| Fitted {
+        .map(|t| t.offset - dot(t.normal, centre));
+    let (radius, overshoot) = round_through(corners, distance, faces)?;
+    Some(Fitted {
         centre,
         axes: IDENTITY,
         form: FitForm::Sphere { radius },
         overshoot,
         corners: corners.clone(),
     })
+}
+
+/// The radius of the round solid (a cylinder or a ball) through the
+/// farthest of `corners`, each at `distance` from its axis or centre, and
+/// how far it reaches beyond the hull whose face planes lie at `planes`
+/// from the axis or centre (the hull holds the solid of their least
+/// radius): `None` unless every corner is nearly on it and it reaches at
+/// most [`ROUND_OVERSHOOT`] of its radius beyond.
+fn round_through(
+    corners: &[V3],
+    distance: impl Fn(V3) -> f64,
+    planes: impl Iterator<Item = f64>,
+) -> Option<(f64, f64)> {
+    let (nearest, radius) = corners
+        .iter()
+        .map(|&p| distance(p))
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        });
+    let inner = planes.fold(f64::INFINITY, f64::min);
+    if nearest < radius * (1.0 - ROUND_OVERSHOOT) || !inner.is_finite() {
+        return None;
+    }
+    let overshoot = radius - inner.min(radius);
+    (overshoot <= ROUND_OVERSHOOT * radius).then_some((radius, overshoot))
 }
 
 impl Fitted {

@@ -65,12 +65,16 @@ fn pips_payload_bay_reaches_around_the_payload() {
         "{report}"
     );
     // The payload actually constrains the path.
-    let closest = t
-        .rows
+    let closest = closest_clearance(&t);
+    assert!(closest < 1.0, "closest approach C-1 = {closest}");
+}
+
+/// The least `C - 1` over a trajectory's rows.
+fn closest_clearance(t: &Trajectory) -> f64 {
+    t.rows
         .iter()
         .filter_map(|r| r.clearance)
-        .fold(f64::INFINITY, f64::min);
-    assert!(closest < 1.0, "closest approach C-1 = {closest}");
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Motion time of a run: the sum of its steps' `h`, seconds.
@@ -137,11 +141,7 @@ fn panda_shelf_mesh_reaches_into_a_shelf_of_ten_boards_from_one_stl() {
     assert_eq!(problem.obstacle_names[9], "shelf part 10");
     // The hand goes in between the boards: the arm comes within the
     // boards' influence.
-    let closest = t
-        .rows
-        .iter()
-        .filter_map(|r| r.clearance)
-        .fold(f64::INFINITY, f64::min);
+    let closest = closest_clearance(&t);
     assert!(closest < 1.0, "closest approach C-1 = {closest}");
 }
 
