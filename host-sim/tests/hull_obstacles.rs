@@ -678,7 +678,7 @@ fn more_parts_than_hull_slots_share_hulls_that_hold_them_and_the_loader_says_so(
     assert!(p.hulls.is_empty() && p.notes.is_empty(), "{:?}", p.notes);
     assert_eq!(p.obstacles.len(), 9);
     assert!((0..9).all(|k| close(half_extents(&p, k), [0.01; 3])));
-    // Nine parts that are not boxes, eight hull slots: the closest two
+    // Nine parts that are no primitive, eight hull slots: the closest two
     // share one, and the note says which.
     let p = load_in(dir.path(), &mesh("frusta.stl")).unwrap();
     assert_eq!(p.hulls.len(), 8);
@@ -690,7 +690,7 @@ fn more_parts_than_hull_slots_share_hulls_that_hold_them_and_the_loader_says_so(
     assert_eq!(p.obstacle_names, names);
     assert_eq!(
         p.notes,
-        [format!("obstacle \"nine\" (line {line}): its mesh has 9 parts that are not boxes, more than the 8 hull slots left for it (a scenario holds 8 hulls): neighbouring parts share a hull that holds them (6 + 7), which closes the gaps between them")]
+        [format!("obstacle \"nine\" (line {line}): its mesh has 9 parts that are not boxes, cylinders or balls, more than the 8 hull slots left for it (a scenario holds 8 hulls): neighbouring parts share a hull that holds them (6 + 7), which closes the gaps between them")]
     );
     // Every vertex of every part is in (or on) its obstacle.
     for (k, t) in frusta.chunks(12).enumerate() {

@@ -477,7 +477,7 @@ fn mesh_pieces(
             })
             .collect();
         note = Some(format!(
-            "its mesh has {} parts that are not boxes, more than the {slots} hull slots left for it (a scenario holds {MAX_HULLS} hulls): neighbouring parts share a hull that holds them ({}), which closes the gaps between them",
+            "its mesh has {} parts that are not boxes, cylinders or balls, more than the {slots} hull slots left for it (a scenario holds {MAX_HULLS} hulls): neighbouring parts share a hull that holds them ({}), which closes the gaps between them",
             rest.len(),
             listed.join("; ")
         ));
