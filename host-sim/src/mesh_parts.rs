@@ -63,6 +63,53 @@ const MAX_CYLINDER_SIDES: usize = 512;
 /// longest axis, neighbour with neighbour, until they are this few.
 const MAX_COMPARED: usize = 128;
 
+/// One separate part of a mesh: its positions (each once) and its
+/// triangles (indices into them, wound as the file winds them).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshPart {
+    /// The positions, length units (the mesh's frame).
+    pub points: Vec<V3>,
+    /// The triangles.
+    pub triangles: Vec<[usize; 3]>,
+}
+
+impl MeshPart {
+    /// The volume the part's surface encloses, when the surface is closed
+    /// and consistently wound (every edge of a triangle met once the other
+    /// way by another; degenerate triangles left out): the divergence
+    /// theorem's sum of the triangles' cones from the origin. `None` for an
+    /// open or inconsistently wound surface.
+    pub fn volume(&self) -> Option<f64> {
+        use std::collections::HashMap;
+        let proper = self
+            .triangles
+            .iter()
+            .filter(|[a, b, c]| a != b && b != c && a != c);
+        let mut edges: HashMap<(usize, usize), u32> = HashMap::new();
+        let mut volume = 0.0;
+        for &[a, b, c] in proper {
+            for edge in [(a, b), (b, c), (c, a)] {
+                *edges.entry(edge).or_default() += 1;
+            }
+            let [pa, pb, pc] = [a, b, c].map(|i| self.points.get(i).copied());
+            volume += dot(pa?, cross(pb?, pc?)) / 6.0;
+        }
+        let closed = !edges.is_empty()
+            && edges
+                .iter()
+                .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1));
+        closed.then_some(volume.abs())
+    }
+
+    /// The share of its convex hull's volume that is not the part (0 for a
+    /// convex part), when its surface is closed ([`MeshPart::volume`]).
+    pub fn hollowness(&self) -> Option<f64> {
+        let part = self.volume()?;
+        let hull = volume(&cloud_hull(&self.points).ok()?);
+        (hull > 0.0).then(|| (1.0 - part / hull).max(0.0))
+    }
+}
+
 /// A primitive a part is, fitted round its hull, in the part's (the mesh
 /// file's) frame.
 #[derive(Clone, Debug, PartialEq)]

@@ -116,6 +116,14 @@ fn pips_payload_bay_mesh_reaches_past_a_bracket_from_an_stl() {
     assert_eq!(problem.obstacles[bracket].shape, Shape::Convex { hull: 0 });
     assert_eq!(problem.hulls.len(), 1);
     assert_eq!(problem.hulls[0].len(), 10, "{:?}", problem.hulls[0]);
+    // The STL is closed, so the loader can tell how hollow its hull is: the
+    // L's cross-section is 88 in^2 of the hull's 124.
+    assert_eq!(problem.notes.len(), 1, "{:?}", problem.notes);
+    assert!(
+        problem.notes[0].starts_with("obstacle \"bracket\" (line 45): it is not convex: planned round its convex hull, 29 % of which is not the part"),
+        "{:?}",
+        problem.notes
+    );
     let (_, without) = plan("pips_payload_bay_cad.toml");
     let (_, with) = plan("pips_payload_bay_mesh.toml");
     assert_ne!(

@@ -21,7 +21,7 @@ use capp_core::{
 };
 
 use crate::enclosure::{enclose, Enclosure};
-use crate::mesh_parts::{fit, merge, FitForm, Placed};
+use crate::mesh_parts::{fit, merge, FitForm, MeshPart, Placed};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -279,7 +279,7 @@ fn as_f32(corners: &[[f64; 3]]) -> Vec<[f32; 3]> {
 /// (an OBJ's `o` or `g`, an ASCII STL's `solid`), split further into the
 /// groups of faces that share no vertex (vertices at the same position are
 /// one: STL repeats them per triangle). `shown` names the file in errors.
-fn mesh_parts(file: &Path, shown: &str) -> Result<Vec<Vec<[f64; 3]>>, String> {
+fn mesh_parts(file: &Path, shown: &str) -> Result<Vec<MeshPart>, String> {
     if !file.is_file() {
         return Err(format!(
             "obstacle: mesh \"{shown}\" not found ({})",
@@ -326,7 +326,7 @@ fn mesh_parts(file: &Path, shown: &str) -> Result<Vec<Vec<[f64; 3]>>, String> {
         let vertices: Vec<[f64; 3]> = mesh.vertices.iter().map(|v| v.map(f64::from)).collect();
         parts.extend(connected_parts(&vertices, &mesh.faces));
     }
-    if parts.iter().all(Vec::is_empty) {
+    if parts.iter().all(|p| p.points.is_empty()) {
         return Err(format!("obstacle: mesh \"{shown}\" has no vertices"));
     }
     Ok(parts)
@@ -335,7 +335,7 @@ fn mesh_parts(file: &Path, shown: &str) -> Result<Vec<Vec<[f64; 3]>>, String> {
 /// The groups of `faces` (triangles of indices into `vertices`) that share
 /// no vertex, each as its distinct vertices; vertices at the same position
 /// are one, and vertices no face names are a group of their own.
-fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3]>> {
+fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<MeshPart> {
     use std::collections::BTreeMap;
     // Each position once (by its bits), then a union-find over faces.
     let mut welded = BTreeMap::new();
@@ -366,13 +366,26 @@ fn connected_parts(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 3
             }
         }
     }
-    let mut groups: BTreeMap<usize, Vec<[f64; 3]>> = BTreeMap::new();
+    // Each part's positions in the order of their first writing, and each
+    // welded position's index within its part.
+    let mut groups: BTreeMap<usize, MeshPart> = BTreeMap::new();
     let mut positions: Vec<(usize, [u64; 3])> =
         welded.into_iter().map(|(bits, id)| (id, bits)).collect();
     positions.sort();
+    let mut within = vec![0; positions.len()];
     for (id, bits) in positions {
         let r = find(&mut root, id);
-        groups.entry(r).or_default().push(bits.map(f64::from_bits));
+        let part = groups.entry(r).or_default();
+        within[id] = part.points.len();
+        part.points.push(bits.map(f64::from_bits));
+    }
+    for face in faces {
+        if let [Some(a), Some(b), Some(c)] = face.map(named) {
+            let r = find(&mut root, a);
+            if let Some(part) = groups.get_mut(&r) {
+                part.triangles.push([a, b, c].map(|id| within[id]));
+            }
+        }
     }
     groups.into_values().collect()
 }
@@ -411,7 +424,7 @@ enum Form {
 /// `placement` is the mesh's centre and Euler angles, radians (for the
 /// boxes).
 fn mesh_pieces(
-    parts: Vec<Vec<[f64; 3]>>,
+    parts: Vec<MeshPart>,
     separate: bool,
     slots: usize,
     placement: &([f64; 3], [f64; 3]),
@@ -420,9 +433,14 @@ fn mesh_pieces(
     let closed = |part: &[[f64; 3]]| {
         mesh_hull(part).is_ok_and(|hull| Hull::new(&as_f32(&hull.corners)).is_ok())
     };
-    let hull_piece = |parts: Vec<usize>, points: &[[f64; 3]]| -> Result<Piece, String> {
+    // A hull of `points`; `part`, when it is one part alone, for the note
+    // on how hollow it is.
+    let hull_piece = |parts: Vec<usize>,
+                      points: &[[f64; 3]],
+                      part: Option<&MeshPart>|
+     -> Result<Piece, String> {
         let hull = mesh_hull(points).map_err(|e| e.to_string())?;
-        let note = enclosure_note(&hull, unit);
+        let note = enclosure_note(&hull, unit).or_else(|| part.and_then(hollow_note));
         Ok(Piece {
             parts,
             form: Form::Hull(as_f32(&hull.corners), note),
@@ -445,25 +463,29 @@ fn mesh_pieces(
             form: Form::Solid(f.placed(placement.0, placement.1), note),
         }
     };
-    let piece = |parts: Vec<usize>, points: &[[f64; 3]]| match fit(points) {
-        Some(f) => Ok(solid(parts, &f)),
-        None => hull_piece(parts, points),
-    };
-    if !(separate && parts.len() > 1 && parts.iter().all(|p| closed(p))) {
-        let all = parts.concat();
-        return Ok((vec![piece(Vec::new(), &all)?], None));
+    if !(separate && parts.len() > 1 && parts.iter().all(|p| closed(&p.points))) {
+        let all: Vec<[f64; 3]> = parts.iter().flat_map(|p| p.points.clone()).collect();
+        let alone = match parts.as_slice() {
+            [part] => Some(part),
+            _ => None,
+        };
+        let piece = match fit(&all) {
+            Some(f) => solid(Vec::new(), &f),
+            None => hull_piece(Vec::new(), &all, alone)?,
+        };
+        return Ok((vec![piece], None));
     }
     let mut pieces = Vec::new();
     let mut rest = Vec::new();
     for (k, part) in parts.iter().enumerate() {
-        match fit(part) {
+        match fit(&part.points) {
             Some(f) => pieces.push(solid(vec![k], &f)),
             None => rest.push(k),
         }
     }
     let mut note = None;
     if rest.len() > slots && slots > 0 {
-        let points: Vec<Vec<[f64; 3]>> = rest.iter().map(|&k| parts[k].clone()).collect();
+        let points: Vec<Vec<[f64; 3]>> = rest.iter().map(|&k| parts[k].points.clone()).collect();
         let groups: Vec<Vec<usize>> = merge(&points, slots)
             .into_iter()
             .map(|g| g.into_iter().map(|i| rest[i]).collect())
@@ -482,16 +504,38 @@ fn mesh_pieces(
             listed.join("; ")
         ));
         for group in groups {
-            let points: Vec<[f64; 3]> = group.iter().flat_map(|&k| parts[k].clone()).collect();
-            pieces.push(hull_piece(group, &points)?);
+            let points: Vec<[f64; 3]> = group
+                .iter()
+                .flat_map(|&k| parts[k].points.clone())
+                .collect();
+            let alone = match group.as_slice() {
+                [k] => parts.get(*k),
+                _ => None,
+            };
+            pieces.push(hull_piece(group, &points, alone)?);
         }
     } else {
         for k in rest {
-            pieces.push(hull_piece(vec![k], &parts[k])?);
+            pieces.push(hull_piece(vec![k], &parts[k].points, Some(&parts[k]))?);
         }
     }
     pieces.sort_by_key(|p| p.parts.first().copied());
     Ok((pieces, note))
+}
+
+/// A part's hull is at least this hollow (the share of its volume that is
+/// not the part) before the loader says so.
+const HOLLOW_NOTE: f64 = 0.05;
+
+/// What the notes say of a part that is not convex (its closed surface
+/// leaves [`HOLLOW_NOTE`] or more of its hull empty); `None` for a convex
+/// part or an open surface.
+fn hollow_note(part: &MeshPart) -> Option<String> {
+    let hollow = part.hollowness().filter(|&h| h >= HOLLOW_NOTE)?;
+    Some(format!(
+        "it is not convex: planned round its convex hull, {:.0} % of which is not the part (the arm keeps out of its hollows; to let it in, split the part into convex pieces, in CAD or with CoACD or V-HACD, written as OBJ objects)",
+        100.0 * hollow
+    ))
 }
 
 /// `x` (not negative) to two significant digits, in plain decimals (a
@@ -1247,9 +1291,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             } => {
                 let here = path.parent().unwrap_or(Path::new("."));
                 let parts = mesh_parts(&here.join(&file), &file).map_err(|e| err(line, e))?;
-                let scaled: Vec<Vec<[f64; 3]>> = parts
+                let scaled: Vec<MeshPart> = parts
                     .into_iter()
-                    .map(|part| part.into_iter().map(|p| p.map(|x| x * scale)).collect())
+                    .map(|part| MeshPart {
+                        points: part.points.iter().map(|p| p.map(|x| x * scale)).collect(),
+                        triangles: part.triangles,
+                    })
                     .collect();
                 let placement = (s.centre, s.euler.map(|x| x * angle));
                 let (pieces, merged) =
@@ -1540,6 +1587,7 @@ fn scale_lengths(mut j: Joint, scale: f32) -> Joint {
 #[cfg(test)]
 mod tests {
     use super::connected_parts;
+    use crate::mesh_parts::MeshPart;
 
     #[test]
     fn parts_are_the_groups_of_faces_that_share_a_position() {
@@ -1551,13 +1599,33 @@ mod tests {
         let mut vertices = vec![a, b, c, minus, b, d, a, c, d, b, c, d];
         vertices.extend(far);
         let faces: Vec<[u32; 3]> = (0..5).map(|f| [3 * f, 3 * f + 1, 3 * f + 2]).collect();
-        let mut parts = connected_parts(&vertices, &faces);
-        parts
-            .iter_mut()
-            .for_each(|p| p.sort_by(|x, y| x.partial_cmp(y).unwrap()));
+        let parts = connected_parts(&vertices, &faces);
+        let sorted = |p: &MeshPart| {
+            let mut points = p.points.clone();
+            points.sort_by(|x, y| x.partial_cmp(y).unwrap());
+            points
+        };
         assert_eq!(parts.len(), 2, "{parts:?}");
-        assert_eq!(parts[0].len(), 4, "the tetrahedron's 4 corners once each");
-        assert_eq!(parts[1], [far[0], far[2], far[1]]);
+        assert_eq!(
+            parts[0].points.len(),
+            4,
+            "the tetrahedron's 4 corners once each"
+        );
+        assert_eq!(sorted(&parts[1]), [far[0], far[2], far[1]]);
+        // Each part keeps its triangles, on its own positions.
+        assert_eq!(parts[0].triangles.len(), 4);
+        assert_eq!(parts[1].triangles.len(), 1);
+        let at = |p: &MeshPart, t: usize| p.triangles[t].map(|i| p.points[i]);
+        assert_eq!(at(&parts[1], 0), far);
+        assert_eq!(at(&parts[0], 3), [b, c, d]);
+        // Wound two ways (its first face inward), the tetrahedron has no
+        // volume to tell; wound outward, a sixth; the lone triangle is open.
+        assert_eq!(parts[0].volume(), None);
+        assert_eq!(parts[1].volume(), None);
+        let outward = [a, c, b, a, b, d, a, d, c, b, c, d];
+        let tetra = connected_parts(&outward, &faces[..4]);
+        assert!((tetra[0].volume().unwrap() - 1.0 / 6.0).abs() < 1e-15);
+        assert_eq!(tetra[0].hollowness(), Some(0.0));
         // A vertex no face names is a part of its own.
         vertices.push([9.0, 9.0, 9.0]);
         assert_eq!(connected_parts(&vertices, &faces).len(), 3);
