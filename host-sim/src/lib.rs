@@ -33,6 +33,7 @@
 pub mod acm;
 pub mod check;
 pub mod cli;
+pub mod decompose;
 pub mod drive_check;
 pub mod enclosure;
 pub mod escapes;

@@ -563,6 +563,11 @@ impl Cluster {
     }
 }
 
+/// The volume of the convex hull of `points`, `None` when they span none.
+pub fn hull_volume(points: &[V3]) -> Option<f64> {
+    cloud_hull(points).ok().map(|hull| volume(&hull))
+}
+
 /// The volume of a hull: its boundary triangles' cones from the origin
 /// (signed, the outward triangles counter-clockwise).
 fn volume(hull: &CloudHull) -> f64 {

@@ -1015,3 +1015,81 @@ fn a_round_drum_and_a_fine_ball_from_cad_are_a_cylinder_and_a_ball() {
     );
     common::check_accepts(&out);
 }
+
+#[test]
+fn the_arm_reaches_into_the_notch_of_an_l_that_its_hull_would_fill() {
+    // One closed STL part, an L whose notch holds the target (inside the
+    // L's hull, 0.1 from the L): split along its own faces into two boxes,
+    // the arm reaches the target and the checker accepts the run; as one
+    // hull round it (`parts = "one"`) the target is inside, and the arm
+    // stops short.
+    let dir = tempfile::tempdir().unwrap();
+    let outline: [[f32; 2]; 6] = [
+        [0.25, 0.8],
+        [0.5, 0.8],
+        [0.5, 0.55],
+        [0.6, 0.55],
+        [0.6, 0.9],
+        [0.25, 0.9],
+    ];
+    let at = |k: usize, z: f32| [outline[k][0], outline[k][1], z];
+    let (bottom, top) = (-0.05, 0.05);
+    let mut triangles = Vec::new();
+    // The ends: fans from the outer corner (the L is star-shaped from it).
+    for k in [5, 0, 1, 2] {
+        let j = if k == 5 { 0 } else { k + 1 };
+        triangles.push([at(4, top), at(k, top), at(j, top)]);
+        triangles.push([at(4, bottom), at(j, bottom), at(k, bottom)]);
+    }
+    for k in 0..6 {
+        let j = (k + 1) % 6;
+        triangles.push([at(k, bottom), at(j, bottom), at(j, top)]);
+        triangles.push([at(k, bottom), at(j, top), at(k, top)]);
+    }
+    write(dir.path(), "l.stl", &ascii_stl(&triangles));
+    let scenario = |parts: &str| {
+        write(
+            dir.path(),
+            &format!("{parts}.toml"),
+            &format!(
+                "{}\n[[obstacles]]\nname = \"l\"\nshape = \"mesh\"\nmesh = \"l.stl\"\nparts = \"{parts}\"\ncentre = [0.0, 0.0, 0.0]\n",
+                head()
+            ),
+        )
+    };
+    let p = Problem::load(&scenario("separate")).unwrap();
+    assert_eq!(p.obstacle_names, ["l piece 1", "l piece 2"]);
+    assert!(p.hulls.is_empty());
+    assert_eq!(
+        p.notes,
+        [format!(
+            "obstacle \"l\" (line {}): it is not convex: split along its own faces into 2 convex pieces (2 boxes), which hold it exactly",
+            head().lines().count() + 2
+        )]
+    );
+    // The target is 0.1 from each box.
+    for k in 0..2 {
+        let d = world_distance(&p, k, [0.4, 0.7, 0.0]);
+        assert!((d - 0.1).abs() < 1e-5, "piece {k}: {d}");
+    }
+    let out = dir.path().join("separate");
+    common::run_rendered(&scenario("separate"), &out);
+    common::check_accepts(&out);
+    let one = Problem::load(&scenario("one")).unwrap();
+    assert_eq!(one.hulls.len(), 1);
+    assert!(world_distance(&one, 0, [0.4, 0.7, 0.0]) < 0.0);
+    let o = capp()
+        .args([
+            "run",
+            scenario("one").to_str().unwrap(),
+            "-o",
+            dir.path().join("one").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("outcome:") && !stdout.contains("outcome:           reached"),
+        "{stdout}"
+    );
+}

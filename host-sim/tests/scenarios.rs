@@ -109,20 +109,32 @@ fn pips_payload_bay_cad_reaches_among_true_boxes_and_a_true_cylinder() {
 fn pips_payload_bay_mesh_reaches_past_a_bracket_from_an_stl() {
     use capp_core::Shape;
     let (problem, t) = runs_and_checks("pips_payload_bay_mesh.toml", Outcome::Reached);
-    // The bracket is the hull of the STL's L: ten corners (the L's inner
-    // corner, on neither end, is inside), and the arm comes within its
-    // influence.
-    let bracket = problem.obstacles.len() - 1;
-    assert_eq!(problem.obstacles[bracket].shape, Shape::Convex { hull: 0 });
-    assert_eq!(problem.hulls.len(), 1);
-    assert_eq!(problem.hulls[0].len(), 10, "{:?}", problem.hulls[0]);
-    // The STL is closed, so the loader can tell how hollow its hull is: the
-    // L's cross-section is 88 in^2 of the hull's 124.
-    assert_eq!(problem.notes.len(), 1, "{:?}", problem.notes);
-    assert!(
-        problem.notes[0].starts_with("obstacle \"bracket\" (line 45): it is not convex: planned round its convex hull, 29 % of which is not the part"),
-        "{:?}",
-        problem.notes
+    // The bracket is an L (its STL closed): split along its own faces into
+    // two boxes, the bar and the upright, which hold it exactly (its hull
+    // would fill the notch, 29 % of the hull), no hull slot taken.
+    let n = problem.obstacles.len();
+    assert!(problem.hulls.is_empty());
+    assert_eq!(
+        problem.obstacle_names[n - 2..],
+        ["bracket piece 1", "bracket piece 2"]
+    );
+    let mut halves: Vec<[f32; 3]> = problem.obstacles[n - 2..]
+        .iter()
+        .map(|o| match o.shape {
+            Shape::Cuboid { half_extents } => half_extents,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    halves.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    for (got, want) in halves.iter().zip([[2.0, 3.0, 6.0], [8.0, 2.0, 6.0]]) {
+        assert!(
+            (0..3).all(|k| got[k] >= want[k] && got[k] - want[k] < 1e-4),
+            "{got:?}"
+        );
+    }
+    assert_eq!(
+        problem.notes,
+        ["obstacle \"bracket\" (line 45): it is not convex: split along its own faces into 2 convex pieces (2 boxes), which hold it exactly"]
     );
     let (_, without) = plan("pips_payload_bay_cad.toml");
     let (_, with) = plan("pips_payload_bay_mesh.toml");

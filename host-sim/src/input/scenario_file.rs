@@ -398,9 +398,12 @@ fn mesh_hull(points: &[[f64; 3]]) -> Result<Enclosure, NoHull> {
 }
 
 /// What one obstacle entry becomes: a primitive or a hull, made of these parts
-/// of its mesh (0-based; empty for a `convex` entry).
+/// of its mesh (0-based; empty for a `convex` entry), or this piece of its
+/// one part ([`crate::decompose`]).
 struct Piece {
     parts: Vec<usize>,
+    /// `"part"`, or `"piece"` for a piece of a part split in convex pieces.
+    word: &'static str,
     form: Form,
 }
 
@@ -429,7 +432,7 @@ fn mesh_pieces(
     slots: usize,
     placement: &([f64; 3], [f64; 3]),
     unit: &str,
-) -> Result<(Vec<Piece>, Option<String>), String> {
+) -> Result<Pieces, String> {
     let closed = |part: &[[f64; 3]]| {
         mesh_hull(part).is_ok_and(|hull| Hull::new(&as_f32(&hull.corners)).is_ok())
     };
@@ -443,6 +446,7 @@ fn mesh_pieces(
         let note = enclosure_note(&hull, unit).or_else(|| part.and_then(hollow_note));
         Ok(Piece {
             parts,
+            word: "part",
             form: Form::Hull(as_f32(&hull.corners), note),
         })
     };
@@ -460,9 +464,18 @@ fn mesh_pieces(
         });
         Piece {
             parts,
+            word: "part",
             form: Form::Solid(f.placed(placement.0, placement.1), note),
         }
     };
+    // One part that is no primitive: its convex pieces, when a cut pays.
+    if let ([part], true) = (parts.as_slice(), separate) {
+        if fit(&part.points).is_none() {
+            if let Some(split) = split_pieces(part, slots, &solid, &hull_piece)? {
+                return Ok(split);
+            }
+        }
+    }
     if !(separate && parts.len() > 1 && parts.iter().all(|p| closed(&p.points))) {
         let all: Vec<[f64; 3]> = parts.iter().flat_map(|p| p.points.clone()).collect();
         let alone = match parts.as_slice() {
@@ -522,6 +535,106 @@ fn mesh_pieces(
     pieces.sort_by_key(|p| p.parts.first().copied());
     Ok((pieces, note))
 }
+
+/// A mesh's pieces, and the note on how they were made.
+type Pieces = (Vec<Piece>, Option<String>);
+
+/// Makes the piece of a fitted primitive (the parts it is made of).
+type SolidPiece<'a> = dyn Fn(Vec<usize>, &crate::mesh_parts::Fitted) -> Piece + 'a;
+
+/// Makes the piece of a hull round points (the parts it is made of, and the
+/// part itself when it is one alone, for its note).
+type HullPiece<'a> =
+    dyn Fn(Vec<usize>, &[[f64; 3]], Option<&MeshPart>) -> Result<Piece, String> + 'a;
+
+/// `part` split into convex pieces ([`crate::decompose`]), each a
+/// primitive (`solid`) or a hull (`hull_piece`), at most `slots` of them
+/// hulls, and the note that says so; `None` when no cut pays (the part
+/// stays whole). A first split within `slots` pieces; when some of them are
+/// primitives (which take no hull slot), a second with that many more
+/// pieces, kept if its hulls still fit.
+fn split_pieces(
+    part: &MeshPart,
+    slots: usize,
+    solid: &SolidPiece,
+    hull_piece: &HullPiece,
+) -> Result<Option<Pieces>, String> {
+    let pieces_of = |budget: usize| {
+        let points = crate::decompose::decompose(part, budget);
+        let fitted: Vec<_> = points.iter().map(|p| fit(p)).collect();
+        (points, fitted)
+    };
+    let (mut points, mut fitted) = pieces_of(slots.max(1));
+    let primitives = fitted.iter().filter(|f| f.is_some()).count();
+    if primitives > 0 {
+        let (more, more_fitted) = pieces_of((slots + primitives).min(MAX_SPLIT_PIECES));
+        if more_fitted.iter().filter(|f| f.is_none()).count() <= slots {
+            (points, fitted) = (more, more_fitted);
+        }
+    }
+    if points.len() < 2 {
+        return Ok(None);
+    }
+    let mut pieces = Vec::new();
+    for (k, (p, f)) in points.iter().zip(&fitted).enumerate() {
+        let mut piece = match f {
+            Some(f) => solid(vec![k], f),
+            None => hull_piece(vec![k], p, None)?,
+        };
+        piece.word = "piece";
+        pieces.push(piece);
+    }
+    let count = |form: fn(&FitForm) -> bool| {
+        fitted
+            .iter()
+            .filter(|f| f.as_ref().is_some_and(|f| form(&f.form)))
+            .count()
+    };
+    let kinds = [
+        (count(|f| matches!(f, FitForm::Box { .. })), "box", "boxes"),
+        (
+            count(|f| matches!(f, FitForm::Cylinder { .. })),
+            "cylinder",
+            "cylinders",
+        ),
+        (
+            count(|f| matches!(f, FitForm::Sphere { .. })),
+            "ball",
+            "balls",
+        ),
+        (
+            fitted.iter().filter(|f| f.is_none()).count(),
+            "hull",
+            "hulls",
+        ),
+    ];
+    let listed: Vec<String> = kinds
+        .iter()
+        .filter(|(n, ..)| *n > 0)
+        .map(|&(n, one, many)| format!("{n} {}", if n == 1 { one } else { many }))
+        .collect();
+    let held: f64 = points
+        .iter()
+        .filter_map(|p| crate::mesh_parts::hull_volume(p))
+        .sum();
+    let hollow = match part.volume().filter(|_| held > 0.0) {
+        Some(v) if 1.0 - v / held < 0.005 => ", which hold it exactly".to_string(),
+        Some(v) => format!(
+            ", {:.0} % of whose volume is not the part",
+            100.0 * (1.0 - v / held)
+        ),
+        None => String::new(),
+    };
+    let note = format!(
+        "it is not convex: split along its own faces into {} convex pieces ({}){hollow}",
+        points.len(),
+        listed.join(", ")
+    );
+    Ok(Some((pieces, Some(note))))
+}
+
+/// Most pieces a part is split into.
+const MAX_SPLIT_PIECES: usize = 24;
 
 /// A part's hull is at least this hollow (the share of its volume that is
 /// not the part) before the loader says so.
@@ -1281,6 +1394,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 let corners = hull_of(&v).map_err(|e| err(line, format!("obstacle: {e}")))?;
                 vec![Piece {
                     parts: Vec::new(),
+                    word: "part",
                     form: Form::Hull(corners, None),
                 }]
             }
@@ -1322,12 +1436,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         for piece in pieces {
             let name = if several {
                 let list: Vec<String> = piece.parts.iter().map(|k| (k + 1).to_string()).collect();
-                let word = if piece.parts.len() > 1 {
-                    "parts"
-                } else {
-                    "part"
-                };
-                format!("{} {word} {}", s.name, list.join(", "))
+                let plural = if piece.parts.len() > 1 { "s" } else { "" };
+                format!("{} {}{plural} {}", s.name, piece.word, list.join(", "))
                     .trim_start()
                     .to_string()
             } else {
