@@ -254,6 +254,16 @@ mod tests {
         MeshPart { points, triangles }
     }
 
+    /// Reproducible uniform numbers in `[lo, hi)`.
+    fn uniform_from(mut state: u64) -> impl FnMut(f64, f64) -> f64 {
+        move |lo, hi| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+        }
+    }
+
     fn inside_some_hull(pieces: &[Vec<V3>], x: V3) -> bool {
         pieces.iter().any(|p| {
             let hull = cloud_hull(p).unwrap();
@@ -284,13 +294,7 @@ mod tests {
         assert!((total - 88.0 * 12.0).abs() < 1e-6, "{total}");
         // The notch's middle is in no piece; every point of the L is in one.
         assert!(!inside_some_hull(&pieces, [2.0, 2.0, 0.0]));
-        let mut state = 9u64;
-        let mut uniform = |lo: f64, hi: f64| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        let mut uniform = uniform_from(9);
         for _ in 0..2000 {
             let p = [uniform(-8.0, 8.0), uniform(-5.0, 5.0), uniform(-6.0, 6.0)];
             let in_l = p[1] <= -1.0 || p[0] <= -4.0;
@@ -330,13 +334,7 @@ mod tests {
             (part.volume().unwrap() - 19.0).abs() < 1e-9,
             "the comb is closed"
         );
-        let mut state = 3u64;
-        let mut uniform = |lo: f64, hi: f64| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        let mut uniform = uniform_from(3);
         let samples: Vec<V3> = (0..1500)
             .map(|_| [uniform(0.0, 9.0), uniform(0.0, 3.0), uniform(-0.5, 0.5)])
             .filter(|p| p[1] <= 1.0 || (p[0] % 2.0) <= 1.0)

@@ -141,19 +141,34 @@ pub fn capp() -> Command {
     Command::new(env!("CARGO_BIN_EXE_capp"))
 }
 
-/// `capp run SCENARIO -o OUT --render`, which must succeed and reach its
-/// target: its standard output.
-pub fn run_rendered(scenario: &Path, out: &Path) -> String {
-    let o = capp()
+/// `capp run SCENARIO -o OUT` with `extra` arguments: its output.
+pub fn run(scenario: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    capp()
         .args([
             "run",
             scenario.to_str().unwrap(),
             "-o",
             out.to_str().unwrap(),
-            "--render",
         ])
+        .args(extra)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// `capp run SCENARIO -o OUT`, which must end without reaching the target.
+pub fn stops_short(scenario: &Path, out: &Path) {
+    let o = run(scenario, out, &[]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("outcome:") && !stdout.contains("outcome:           reached"),
+        "{stdout}"
+    );
+}
+
+/// `capp run SCENARIO -o OUT --render`, which must succeed and reach its
+/// target: its standard output.
+pub fn run_rendered(scenario: &Path, out: &Path) -> String {
+    let o = run(scenario, out, &["--render"]);
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     assert_eq!(
         o.status.code(),
