@@ -316,3 +316,14 @@ fn a_shelf_of_boards_from_one_stl_planned_on_the_board_is_the_host_plan() {
     let n = serial_matches_run("panda_shelf_mesh.toml", &elf);
     assert!(n > 5, "{n} setpoints");
 }
+
+/// The Panda reaching into a tote from one closed STL solid, split into
+/// five boxes on the host: on the board, the host's plan to the bit.
+#[test]
+fn a_tote_split_into_boxes_planned_on_the_board_is_the_host_plan() {
+    let Some(elf) = capp_system_tests::firmware_or_skip() else {
+        return;
+    };
+    let n = serial_matches_run("panda_tote_mesh.toml", &elf);
+    assert!(n > 3, "{n} setpoints");
+}

@@ -15,7 +15,9 @@
 //! candidate plane (the part's own face planes, the largest by area first:
 //! CAD parts are made of few large flat faces, and a concave edge lies on
 //! two of them), the cut that takes the most volume off the hulls, until no
-//! cut takes off [`MIN_GAIN`] of the part's hull or the pieces are spent. A
+//! cut takes off [`MIN_GAIN`] of the part's hull or the pieces are spent (a
+//! closed part still hollow by that much may instead have a box split off,
+//! see [`Rank::Slab`]). A
 //! convex part has no such cut (any cut's two hulls fill the one). This is
 //! the top-down, cut-by-plane family of approximate convex decompositions
 //! (Mamou's V-HACD and Wei et al.'s CoACD, SIGGRAPH 2022, cut by planes and
@@ -25,7 +27,7 @@
 //! decomposition in parry3d would bring nalgebra's `std` into the
 //! workspace; see README).
 
-use crate::mesh_parts::{hull_volume, MeshPart};
+use crate::mesh_parts::{fit, hull_volume, FitForm, MeshPart};
 use crate::polytope::{cross, dot, spread, sub, V3};
 
 /// A cut must take at least this share of the part's hull volume off the
@@ -69,25 +71,54 @@ pub fn decompose(part: &MeshPart, max_pieces: usize) -> Vec<Vec<V3>> {
     let planes = face_planes(part, size);
     let tolerance = 1e-9 * size;
     let least = MIN_GAIN * whole.volume;
+    let no_loss = -tolerance * whole.volume;
+    // A closed part's own volume: while the pieces' hulls hold more than
+    // it by MIN_GAIN, a cut that takes nothing off may still split off a
+    // box (a tote's floor, then its walls one by one: no single cut of a
+    // closed ring of walls shrinks a hull).
+    let solid = part.volume();
+    let is_box = |piece: &Piece| {
+        matches!(
+            fit(&piece.points()).map(|f| f.form),
+            Some(FitForm::Box { .. })
+        )
+    };
     let best_cut = |piece: &Piece| -> Option<Cut> {
         planes
             .iter()
             .filter_map(|&(normal, offset)| {
                 let (a, b) = piece.split(normal, offset, tolerance)?;
                 let gain = piece.volume - a.volume - b.volume;
-                (gain >= least).then_some((gain, a, b))
+                let rank = if gain >= least {
+                    Rank::Gain(gain)
+                } else if solid.is_some() && gain >= no_loss {
+                    match (is_box(&a), is_box(&b)) {
+                        (true, _) => Rank::Slab(a.volume),
+                        (_, true) => Rank::Slab(b.volume),
+                        _ => return None,
+                    }
+                } else {
+                    return None;
+                };
+                Some((rank, a, b))
             })
-            .max_by(|x, y| x.0.total_cmp(&y.0))
+            .max_by(|x, y| x.0.cmp(&y.0))
     };
     let mut pieces: Vec<(Piece, Option<Cut>)> = Vec::new();
     let cut = best_cut(&whole);
     pieces.push((whole, cut));
     while pieces.len() < max_pieces.max(1) {
+        let held: f64 = pieces.iter().map(|(p, _)| p.volume).sum();
+        let hollow = solid.is_some_and(|v| held > v * (1.0 + MIN_GAIN));
         let Some(i) = (0..pieces.len())
-            .filter(|&i| pieces[i].1.is_some())
+            .filter(|&i| match &pieces[i].1 {
+                Some((Rank::Gain(_), ..)) => true,
+                Some((Rank::Slab(_), ..)) => hollow,
+                None => false,
+            })
             .max_by(|&i, &j| {
-                let gain = |k: usize| pieces[k].1.as_ref().map_or(0.0, |c| c.0);
-                gain(i).total_cmp(&gain(j))
+                let rank = |k: usize| pieces[k].1.as_ref().map(|c| c.0);
+                rank(i).cmp(&rank(j))
             })
         else {
             break;
@@ -102,9 +133,36 @@ pub fn decompose(part: &MeshPart, max_pieces: usize) -> Vec<Vec<V3>> {
     pieces.into_iter().map(|(p, _)| p.points()).collect()
 }
 
-/// A cut of a piece: the volume it takes off the hulls, and the two
-/// pieces.
-type Cut = (f64, Piece, Piece);
+/// A cut of a piece: how good it is, and the two pieces.
+type Cut = (Rank, Piece, Piece);
+
+/// How good a cut is: any cut that takes volume off the hulls before any
+/// that only splits off a box; then by the volume taken off, or the box's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Rank {
+    /// Splits off a box of this volume, taking nothing off the hulls.
+    Slab(f64),
+    /// Takes this much volume off the hulls.
+    Gain(f64),
+}
+
+impl Eq for Rank {}
+
+impl PartialOrd for Rank {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Rank {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        match (self, other) {
+            (Rank::Gain(a), Rank::Gain(b)) | (Rank::Slab(a), Rank::Slab(b)) => a.total_cmp(b),
+            (Rank::Gain(_), Rank::Slab(_)) => std::cmp::Ordering::Greater,
+            (Rank::Slab(_), Rank::Gain(_)) => std::cmp::Ordering::Less,
+        }
+    }
+}
 
 /// The part's surface within a cell: polygons, and their hull's volume.
 struct Piece {
@@ -305,6 +363,77 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A tote as one closed solid: a box of half-sizes `(x, y)` and height
+    /// `h` with an open top, walls and floor `t` thick.
+    fn tote(x: f64, y: f64, h: f64, t: f64) -> MeshPart {
+        let ring =
+            |hx: f64, hy: f64, z: f64| [[-hx, -hy, z], [hx, -hy, z], [hx, hy, z], [-hx, hy, z]];
+        let (xi, yi) = (x - t, y - t);
+        let mut points = Vec::new();
+        for r in [
+            ring(x, y, 0.0),
+            ring(x, y, h),
+            ring(xi, yi, t),
+            ring(xi, yi, h),
+        ] {
+            points.extend(r);
+        }
+        // Outer bottom 0-3, outer top 4-7, inner bottom 8-11, inner top 12-15.
+        let mut triangles = Vec::new();
+        let mut quad = |a: usize, b: usize, c: usize, d: usize| {
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        };
+        quad(0, 3, 2, 1);
+        quad(8, 9, 10, 11);
+        for k in 0..4 {
+            let j = (k + 1) % 4;
+            quad(k, j, 4 + j, 4 + k);
+            quad(4 + k, 4 + j, 12 + j, 12 + k);
+            quad(8 + j, 8 + k, 12 + k, 12 + j);
+        }
+        MeshPart { points, triangles }
+    }
+
+    #[test]
+    fn a_tote_is_its_floor_and_four_walls() {
+        // No single cut of its closed ring of walls shrinks a hull: the
+        // floor and the walls are split off as boxes one by one.
+        let part = tote(0.2, 0.15, 0.15, 0.01);
+        let volume = 0.4 * 0.3 * 0.15 - 0.38 * 0.28 * 0.14;
+        assert!((part.volume().unwrap() - volume).abs() < 1e-12);
+        let pieces = decompose(&part, 8);
+        assert_eq!(pieces.len(), 5, "{pieces:?}");
+        for p in &pieces {
+            assert!(
+                matches!(fit(p).map(|f| f.form), Some(FitForm::Box { .. })),
+                "{p:?}"
+            );
+        }
+        let held: f64 = pieces.iter().map(|p| hull_volume(p).unwrap()).sum();
+        assert!((held - volume).abs() < 1e-9, "{held} {volume}");
+        // The inside is free; every point of the tote is in a piece.
+        assert!(!inside_some_hull(&pieces, [0.0, 0.0, 0.05]));
+        assert!(!inside_some_hull(&pieces, [0.185, 0.135, 0.02]));
+        let mut uniform = uniform_from(17);
+        for _ in 0..3000 {
+            let p = [uniform(-0.2, 0.2), uniform(-0.15, 0.15), uniform(0.0, 0.15)];
+            let inside = p[0].abs() < 0.19 && p[1].abs() < 0.14 && p[2] > 0.01;
+            if !inside {
+                assert!(
+                    inside_some_hull(&pieces, p),
+                    "{p:?} of the tote is in no piece"
+                );
+            }
+        }
+        // Open (its floor left out), it has no volume to tell it is hollow,
+        // and no cut pays: one piece.
+        let mut open = part.clone();
+        open.triangles.drain(2..4);
+        assert_eq!(open.volume(), None);
+        assert_eq!(decompose(&open, 8).len(), 1);
     }
 
     #[test]

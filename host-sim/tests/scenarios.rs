@@ -166,6 +166,26 @@ fn panda_shelf_mesh_reaches_into_a_shelf_of_ten_boards_from_one_stl() {
 }
 
 #[test]
+fn panda_tote_mesh_reaches_into_a_tote_from_one_closed_stl() {
+    use capp_core::Shape;
+    let (problem, t) = runs_and_checks("panda_tote_mesh.toml", Outcome::Reached);
+    // One closed solid whose hull (a box) would hold the target: split into
+    // its floor and four walls, each a box.
+    assert_eq!(problem.obstacles.len(), 5);
+    assert!(problem.hulls.is_empty());
+    assert!(problem
+        .obstacles
+        .iter()
+        .all(|o| matches!(o.shape, Shape::Cuboid { .. })));
+    assert_eq!(
+        problem.notes,
+        ["obstacle \"tote\" (line 32): it is not convex: split along its own faces into 5 convex pieces (5 boxes), which hold it exactly"]
+    );
+    // The hand goes in: within the floor's and walls' influence.
+    assert!(closest_clearance(&t) < 5.0, "{}", closest_clearance(&t));
+}
+
+#[test]
 fn pips_dead_end_stalls() {
     runs_and_checks("pips_dead_end.toml", Outcome::Stalled);
 }

@@ -468,12 +468,11 @@ fn mesh_pieces(
             form: Form::Solid(f.placed(placement.0, placement.1), note),
         }
     };
-    // One part that is no primitive: its convex pieces, when a cut pays.
+    // One part: its convex pieces, when a cut pays (a part that is not
+    // convex may still have a primitive for its hull: a tote's is a box).
     if let ([part], true) = (parts.as_slice(), separate) {
-        if fit(&part.points).is_none() {
-            if let Some(split) = split_pieces(part, slots, &solid, &hull_piece)? {
-                return Ok(split);
-            }
+        if let Some(split) = split_pieces(part, slots, &solid, &hull_piece)? {
+            return Ok(split);
         }
     }
     if !(separate && parts.len() > 1 && parts.iter().all(|p| closed(&p.points))) {
@@ -483,7 +482,19 @@ fn mesh_pieces(
             _ => None,
         };
         let piece = match fit(&all) {
-            Some(f) => solid(Vec::new(), &f),
+            Some(f) => {
+                // A primitive round a hollow part says how hollow, too.
+                let mut piece = solid(Vec::new(), &f);
+                if let (Form::Solid(_, note), Some(hollow)) =
+                    (&mut piece.form, alone.and_then(hollow_note))
+                {
+                    *note = Some(match note.take() {
+                        Some(n) => format!("{n}; {hollow}"),
+                        None => hollow,
+                    });
+                }
+                piece
+            }
             None => hull_piece(Vec::new(), &all, alone)?,
         };
         return Ok((vec![piece], None));
@@ -646,7 +657,7 @@ const HOLLOW_NOTE: f64 = 0.05;
 fn hollow_note(part: &MeshPart) -> Option<String> {
     let hollow = part.hollowness().filter(|&h| h >= HOLLOW_NOTE)?;
     Some(format!(
-        "it is not convex: planned round its convex hull, {:.0} % of which is not the part (the arm keeps out of its hollows; to let it in, split the part into convex pieces, in CAD or with CoACD or V-HACD, written as OBJ objects)",
+        "it is not convex: planned round its convex hull, {:.0} % of which is not the part (no cut along its own faces pays: the arm keeps out of its hollows; to let it in, split the part into convex pieces, in CAD or with CoACD or V-HACD, written as OBJ objects)",
         100.0 * hollow
     ))
 }
