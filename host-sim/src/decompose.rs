@@ -15,9 +15,9 @@
 //! candidate plane (the part's own face planes, the largest by area first:
 //! CAD parts are made of few large flat faces, and a concave edge lies on
 //! two of them), the cut that takes the most volume off the hulls, until no
-//! cut takes off [`MIN_GAIN`] of the part's hull or the pieces are spent (a
+//! cut takes off `MIN_GAIN` of the part's hull or the pieces are spent (a
 //! closed part still hollow by that much may instead have a box split off,
-//! see [`Rank::Slab`]). A
+//! see `Rank::Slab`). A
 //! convex part has no such cut (any cut's two hulls fill the one). This is
 //! the top-down, cut-by-plane family of approximate convex decompositions
 //! (Mamou's V-HACD and Wei et al.'s CoACD, SIGGRAPH 2022, cut by planes and

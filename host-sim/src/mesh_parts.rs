@@ -164,8 +164,8 @@ pub struct Placed {
 
 /// The primitive `points` are, when their convex hull is one: a box (8
 /// corners, each at a corner of the box the edges from one of them span,
-/// to [`BOX_TOLERANCE`]), or a cylinder or a ball through every corner that
-/// reaches at most [`ROUND_OVERSHOOT`] of its radius beyond the hull (a
+/// to `BOX_TOLERANCE` (1e-6 of its size)), or a cylinder or a ball through every corner that
+/// reaches at most `ROUND_OVERSHOOT` (2 %) of its radius beyond the hull (a
 /// tessellated CAD cylinder of 16 sides or more, a ball of 16 x 32 facets
 /// or finer); `None` otherwise (or for points that span no volume).
 pub fn fit(points: &[V3]) -> Option<Fitted> {
@@ -380,7 +380,7 @@ impl Fitted {
     /// the `ry = +-90 deg` lock (`|sin ry| <= 1/sqrt 3`). The sizes are
     /// grown by what the `f32` angles and centre move the hull's corners
     /// (measured: the core's own rotation of the rounded angles) plus
-    /// [`ROUNDING`] of the solid's size and distance from the origin, so the
+    /// `ROUNDING` (two `f32` ulps) of the solid's size and distance from the origin, so the
     /// solid the core builds holds every corner of the part.
     pub fn placed(&self, centre: V3, euler: V3) -> Placed {
         let rotation = crate::geometry::rotation(euler);
