@@ -1067,3 +1067,34 @@ fn the_arm_reaches_into_the_notch_of_an_l_that_its_hull_would_fill() {
     assert!(world_distance(&one, 0, [0.4, 0.7, 0.0]) < 0.0);
     common::stops_short(&scenario("one"), &dir.path().join("one"));
 }
+
+#[test]
+fn a_split_part_takes_no_more_obstacles_than_the_scenario_has_left() {
+    // The shipped tote (five boxes when split) after 62 balls: two
+    // obstacles are left, so it is split into two at most, and the
+    // scenario loads with the core's 64.
+    let dir = tempfile::tempdir().unwrap();
+    let tote = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/meshes/tote.stl");
+    let mut obstacles = String::new();
+    for k in 0..62 {
+        obstacles.push_str(&format!(
+            "\n[[obstacles]]\nshape = \"sphere\"\nradius = 0.01\ncentre = [{}, -2.0, 0.0]\n",
+            0.05 * k as f32
+        ));
+    }
+    obstacles.push_str(&format!(
+        "\n[[obstacles]]\nname = \"tote\"\nshape = \"mesh\"\nmesh = \"{}\"\ncentre = [2.0, 2.0, 0.0]\n",
+        tote.display()
+    ));
+    let p = load_in(dir.path(), &obstacles).unwrap();
+    assert_eq!(p.obstacles.len(), 64, "{:?}", p.obstacle_names);
+    assert_eq!(p.obstacle_names[62..], ["tote piece 1", "tote piece 2"]);
+    p.scenario().unwrap();
+    // Alone, five.
+    let p = load_in(
+        dir.path(),
+        &obstacles[obstacles.rfind("\n[[obstacles]]").unwrap()..],
+    )
+    .unwrap();
+    assert_eq!(p.obstacles.len(), 5);
+}

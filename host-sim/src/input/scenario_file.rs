@@ -27,7 +27,7 @@ use toml::Spanned;
 
 use crate::problem::{
     DriveLimits, JointDriveLimits, LoadError, Problem, SourceKind, DEFAULT_CONTROL_PERIOD_S,
-    DEFAULT_JERK_TIME_S, DEFAULT_RAMP_TIME_S, MAX_JOINTS,
+    DEFAULT_JERK_TIME_S, DEFAULT_RAMP_TIME_S, MAX_JOINTS, MAX_OBSTACLES,
 };
 
 /// Length of one inch in metres.
@@ -417,7 +417,9 @@ enum Form {
 }
 
 /// The pieces of a mesh's `parts` (already scaled), and a note when parts
-/// were merged. With `separate` and every part spanning a volume of its
+/// were merged or a part split. One part (with `separate`) is split into
+/// convex pieces when a cut pays ([`split_pieces`], at most `room`
+/// obstacles). With `separate` and every part spanning a volume of its
 /// own (a closed part): each part that is a box, a cylinder or a ball
 /// ([`fit`]) that solid, each other part a hull, and when those are more
 /// than `slots` (the hull slots this obstacle may take), neighbouring ones
@@ -429,7 +431,7 @@ enum Form {
 fn mesh_pieces(
     parts: Vec<MeshPart>,
     separate: bool,
-    slots: usize,
+    (slots, room): (usize, usize),
     placement: &([f64; 3], [f64; 3]),
     unit: &str,
 ) -> Result<Pieces, String> {
@@ -471,7 +473,7 @@ fn mesh_pieces(
     // One part: its convex pieces, when a cut pays (a part that is not
     // convex may still have a primitive for its hull: a tote's is a box).
     if let ([part], true) = (parts.as_slice(), separate) {
-        if let Some(split) = split_pieces(part, slots, &solid, &hull_piece)? {
+        if let Some(split) = split_pieces(part, (slots, room), &solid, &hull_piece)? {
             return Ok(split);
         }
     }
@@ -560,13 +562,14 @@ type HullPiece<'a> =
 
 /// `part` split into convex pieces ([`crate::decompose`]), each a
 /// primitive (`solid`) or a hull (`hull_piece`), at most `slots` of them
-/// hulls, and the note that says so; `None` when no cut pays (the part
-/// stays whole). A first split within `slots` pieces; when some of them are
+/// hulls and `room` in all (the obstacles the scenario has left for it),
+/// and the note that says so; `None` when no cut pays (the part stays
+/// whole). A first split within `slots` pieces; when some of them are
 /// primitives (which take no hull slot), a second with that many more
 /// pieces, kept if its hulls still fit.
 fn split_pieces(
     part: &MeshPart,
-    slots: usize,
+    (slots, room): (usize, usize),
     solid: &SolidPiece,
     hull_piece: &HullPiece,
 ) -> Result<Option<Pieces>, String> {
@@ -575,10 +578,11 @@ fn split_pieces(
         let fitted: Vec<_> = points.iter().map(|p| fit(p)).collect();
         (points, fitted)
     };
-    let (mut points, mut fitted) = pieces_of(slots.max(1));
+    let (mut points, mut fitted) = pieces_of(slots.min(room).max(1));
     let primitives = fitted.iter().filter(|f| f.is_some()).count();
     if primitives > 0 {
-        let (more, more_fitted) = pieces_of((slots + primitives).min(MAX_SPLIT_PIECES));
+        let (more, more_fitted) =
+            pieces_of((slots + primitives).min(MAX_SPLIT_PIECES).min(room).max(1));
         if more_fitted.iter().filter(|f| f.is_none()).count() <= slots {
             (points, fitted) = (more, more_fitted);
         }
@@ -1394,6 +1398,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
         };
         let later = needs_hull.iter().skip(index + 1).filter(|&&h| h).count();
         let slots = MAX_HULLS.saturating_sub(hulls.len() + later);
+        // The obstacles a split part may become: one each left for the
+        // entries after it.
+        let room = MAX_OBSTACLES.saturating_sub(obstacles.len() + (needs_hull.len() - index - 1));
         let pieces: Vec<Piece> = match s.shape().map_err(|e| err(line, e))? {
             Given::Shape(shape) => {
                 obstacles.push(solid(shape));
@@ -1425,7 +1432,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                     .collect();
                 let placement = (s.centre, s.euler.map(|x| x * angle));
                 let (pieces, merged) =
-                    mesh_pieces(scaled, separate, slots, &placement, length_unit)
+                    mesh_pieces(scaled, separate, (slots, room), &placement, length_unit)
                         .map_err(|e| err(line, format!("obstacle: mesh \"{file}\": {e}")))?;
                 if let Some(m) = merged {
                     notes.push(format!("{}: {m}", who(&s.name, obstacles.len())));
