@@ -146,18 +146,22 @@ fn pips_payload_bay_mesh_reaches_past_a_bracket_from_an_stl() {
     assert!(!t.rows.is_empty());
 }
 
-#[test]
-fn panda_shelf_mesh_reaches_into_a_shelf_of_ten_boards_from_one_stl() {
-    use capp_core::Shape;
-    let (problem, t) = runs_and_checks("panda_shelf_mesh.toml", Outcome::Reached);
-    // Ten separate parts, more than a scenario's 8 hulls: each board is a
-    // box, none a hull.
-    assert_eq!(problem.obstacles.len(), 10);
+/// `problem` has `n` obstacles, every one a box, and no hull.
+fn assert_boxes_only(problem: &Problem, n: usize) {
+    assert_eq!(problem.obstacles.len(), n);
     assert!(problem.hulls.is_empty());
     assert!(problem
         .obstacles
         .iter()
-        .all(|o| matches!(o.shape, Shape::Cuboid { .. })));
+        .all(|o| matches!(o.shape, capp_core::Shape::Cuboid { .. })));
+}
+
+#[test]
+fn panda_shelf_mesh_reaches_into_a_shelf_of_ten_boards_from_one_stl() {
+    let (problem, t) = runs_and_checks("panda_shelf_mesh.toml", Outcome::Reached);
+    // Ten separate parts, more than a scenario's 8 hulls: each board is a
+    // box, none a hull.
+    assert_boxes_only(&problem, 10);
     assert_eq!(problem.obstacle_names[9], "shelf part 10");
     // The hand goes in between the boards: the arm comes within the
     // boards' influence.
@@ -167,16 +171,10 @@ fn panda_shelf_mesh_reaches_into_a_shelf_of_ten_boards_from_one_stl() {
 
 #[test]
 fn panda_tote_mesh_reaches_into_a_tote_from_one_closed_stl() {
-    use capp_core::Shape;
     let (problem, t) = runs_and_checks("panda_tote_mesh.toml", Outcome::Reached);
     // One closed solid whose hull (a box) would hold the target: split into
     // its floor and four walls, each a box.
-    assert_eq!(problem.obstacles.len(), 5);
-    assert!(problem.hulls.is_empty());
-    assert!(problem
-        .obstacles
-        .iter()
-        .all(|o| matches!(o.shape, Shape::Cuboid { .. })));
+    assert_boxes_only(&problem, 5);
     assert_eq!(
         problem.notes,
         ["obstacle \"tote\" (line 32): it is not convex: split along its own faces into 5 convex pieces (5 boxes), which hold it exactly"]

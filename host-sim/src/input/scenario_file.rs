@@ -599,34 +599,27 @@ fn split_pieces(
         piece.word = "piece";
         pieces.push(piece);
     }
-    let count = |form: fn(&FitForm) -> bool| {
-        fitted
-            .iter()
-            .filter(|f| f.as_ref().is_some_and(|f| form(&f.form)))
-            .count()
-    };
+    // How many pieces of each kind: boxes, cylinders, balls, hulls.
+    let mut counts = [0usize; 4];
+    for f in &fitted {
+        counts[match f.as_ref().map(|f| f.form) {
+            Some(FitForm::Box { .. }) => 0,
+            Some(FitForm::Cylinder { .. }) => 1,
+            Some(FitForm::Sphere { .. }) => 2,
+            None => 3,
+        }] += 1;
+    }
     let kinds = [
-        (count(|f| matches!(f, FitForm::Box { .. })), "box", "boxes"),
-        (
-            count(|f| matches!(f, FitForm::Cylinder { .. })),
-            "cylinder",
-            "cylinders",
-        ),
-        (
-            count(|f| matches!(f, FitForm::Sphere { .. })),
-            "ball",
-            "balls",
-        ),
-        (
-            fitted.iter().filter(|f| f.is_none()).count(),
-            "hull",
-            "hulls",
-        ),
+        ("box", "boxes"),
+        ("cylinder", "cylinders"),
+        ("ball", "balls"),
+        ("hull", "hulls"),
     ];
-    let listed: Vec<String> = kinds
+    let listed: Vec<String> = counts
         .iter()
-        .filter(|(n, ..)| *n > 0)
-        .map(|&(n, one, many)| format!("{n} {}", if n == 1 { one } else { many }))
+        .zip(kinds)
+        .filter(|(&n, _)| n > 0)
+        .map(|(&n, (one, many))| format!("{n} {}", if n == 1 { one } else { many }))
         .collect();
     let held: f64 = points
         .iter()
