@@ -136,6 +136,25 @@ pub fn from_box(x: &Vec3, half: &Vec3) -> Vec3 {
     )
 }
 
+/// Twice [`from_box`], to the bit (twice a float is exact): each
+/// component `2 (v - clamp(v, -h, h))` as `(v - h) + |v - h|` (twice the
+/// excess beyond `+h`, or `+0`) plus `(v + h) - |v + h|` (twice the excess
+/// beyond `-h`, or `+0`). At most one of the two is not `+0`, and `v + h`
+/// rounds as `-(|v| - h)` for `v < -h` (rounding is symmetric), so each
+/// component is twice [`from_box`]'s, `+0` within the slab (`+0 + +0`) and
+/// NaN for a NaN `v`.
+///
+/// Float operations alone, seven an axis: on the Cortex-M4F [`from_box`]'s
+/// integer operations also move each value to a core register and back.
+#[inline(always)]
+pub fn twice_from_box(x: &Vec3, half: &Vec3) -> Vec3 {
+    let twice = |v: f32, h: f32| {
+        let (above, below) = (v - h, v + h);
+        (above + above.abs()) + (below - below.abs())
+    };
+    Vec3::new(twice(x.x, half.x), twice(x.y, half.y), twice(x.z, half.z))
+}
+
 /// `v - clamp(v, -h, h)` for `h > 0`, to the bit (`+0` within the slab, NaN
 /// for a NaN `v`), as `|v| - h` where that is positive, signed as `v`.
 ///
@@ -451,5 +470,52 @@ mod tests {
             let (d, _) = signed_distance(&shape, &Vec3::zeros());
             assert!((d + shape.inradius()).abs() < 1e-6, "{shape:?}: {d}");
         }
+    }
+
+    /// `from_box` and `twice_from_box` against `v - clamp(v, -h, h)` (and
+    /// twice it) to the bit, over random values of six decades and the
+    /// edge cases: signed zeros, the faces, one ulp either side, NaN.
+    #[test]
+    fn box_excess_is_the_clamps_residual_to_the_bit() {
+        let residual = |v: f32, h: f32| v - v.max(-h).min(h);
+        let mut state = 11u64;
+        let mut values = heapless::Vec::<(f32, f32), 4096>::new();
+        for h in [0.5f32, 1.0, 3.0e-3, 7.5e2] {
+            for v in [0.0, -0.0, h, -h, 2.0 * h, -2.0 * h, 1.0e-30, -1.0e-30] {
+                for w in [v, v.next_up(), v.next_down()] {
+                    let _ = values.push((w, h));
+                }
+            }
+        }
+        while !values.is_full() {
+            let h = libm::powf(10.0, 3.0 * lcg(&mut state)) + 1.0e-6;
+            let v = libm::powf(10.0, 3.0 * lcg(&mut state)) * lcg(&mut state);
+            let _ = values.push((v, h));
+        }
+        for &(v, h) in &values {
+            let x = Vec3::new(v, -v, v * 0.5);
+            let half = Vec3::new(h, h, h * 0.25);
+            let once = from_box(&x, &half);
+            let twice = twice_from_box(&x, &half);
+            for i in 0..3 {
+                let expected = residual(x[i], half[i]);
+                assert_eq!(
+                    once[i].to_bits(),
+                    expected.to_bits(),
+                    "{} beyond {}",
+                    x[i],
+                    half[i]
+                );
+                assert_eq!(
+                    twice[i].to_bits(),
+                    (2.0 * expected).to_bits(),
+                    "{} beyond {}",
+                    x[i],
+                    half[i]
+                );
+            }
+        }
+        let nan = twice_from_box(&Vec3::new(f32::NAN, 0.0, 0.0), &Vec3::new(1.0, 1.0, 1.0));
+        assert!(nan.x.is_nan() && nan.y == 0.0 && nan.z == 0.0);
     }
 }

@@ -56,7 +56,7 @@ pub mod distance;
 pub mod hull;
 mod solid;
 
-use distance::{from_box, from_segment, signed_distance, Primitive};
+use distance::{from_segment, signed_distance, twice_from_box, Primitive};
 pub use hull::{Hull, HullError, MAX_HULLS, MAX_HULL_VERTICES};
 pub use solid::{Shape, Solid};
 
@@ -979,29 +979,37 @@ impl Obstacle {
     /// d`, one division; inside (or a point not finite), the cold
     /// [`Obstacle::primitive_pair`] (the signed distance, as for every
     /// primitive).
-    // Inline in `pair`, its excess by integer operations ([`from_box`]):
-    // out of line and cold, the call and its result through memory made a
-    // box pair 43 instructions dearer (161.7 against 118.9 in
-    // `step_count`'s loop of pairs). Inline with the excess by float
-    // clamps it crowded the registers of the whole pair loop (a PIPS + 8
-    // step 534 instructions dearer); with integer operations it costs that
-    // step 128 (0.2 %), about 2 a super-ellipsoid pair within influence.
+    // Inline in `pair`, its excess by float operations alone
+    // ([`twice_from_box`], seven an axis, no comparison): M4F, `step_count`,
+    // 113.9 instructions a pair in the loop of pairs against the exponent-8
+    // super-ellipsoid's 118.9 (136.2 / 137.2 each alone). Measured and not
+    // kept: the excess by integer operations (118.8 / 116.8, 150.3 / 141.4:
+    // every value moved to a core register and back); by float `max` and
+    // `copysign` (123.9 / 118.9); out of line with the answer in
+    // registers (a `repr(C)` struct of four floats, AAPCS-VFP): 133.8 /
+    // 114.8, the loop's registers saved round the call; out of line and
+    // cold, the answer through memory, 43 dearer. Inline code shares the
+    // registers of the planner's pair loop: a PIPS + 8 step (no box in it)
+    // is 55 854 instructions with this, 55 421 with the integer excess,
+    // 54 919 with the box out of line.
     #[inline(always)]
     fn cuboid_pair(&self, inflated: &Inflated, x: &Vec3) -> Pair {
-        let o = from_box(x, &self.half_box);
-        let out_sq = o.dot(&o);
+        // Twice the excess `o` and twice `d = |o|`, exactly (scaling by 2
+        // commutes with rounding, the root's too): `o2 / d2 = o / d`.
+        let o2 = twice_from_box(x, &self.half_box);
+        let out_sq4 = o2.dot(&o2);
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        if !(out_sq > 0.0) {
+        if !(out_sq4 > 0.0) {
             return match &self.primitive {
                 Some(primitive) => self.primitive_pair(primitive, inflated, x),
                 None => Pair::Far,
             };
         }
-        let d = crate::math::sqrt_inline(out_sq);
+        let d = 0.5 * crate::math::sqrt_inline(out_sq4);
         let u = (d + self.inradius) * inflated.inv_scale;
         self.primitive_tail(
             u * u - 1.0,
-            o * (2.0 * u * inflated.inv_scale / d),
+            o2 * (u * inflated.inv_scale / d),
             d - inflated.margin,
         )
     }
