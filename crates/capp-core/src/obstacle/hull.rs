@@ -79,6 +79,14 @@ const DIRECTION_CELLS: usize = 24;
 /// box is cheaper scanned (BENCHMARKS.md has the counts).
 const CELL_MIN_VERTICES: usize = 12;
 
+/// Fewest faces for which `Hull::highest_face` tries only its cell's
+/// candidates: a candidate costs about 22 M4F instructions against 14.5 a
+/// face for the plain scan, and finding the cell about 25, so a box's six
+/// faces are cheaper scanned (419 against 397 a query); the 16-vertex
+/// prism's 10 faces (3 candidates a cell) and the 32-vertex prism's 18 are
+/// not.
+const CELL_MIN_FACES: usize = 8;
+
 /// How far (relative to the hull's largest coordinate) one vertex must beat
 /// another at every corner of a direction cell for the other to be left out
 /// of the cell's candidates: 45 times the rounding of the support's f32 dot
@@ -150,9 +158,18 @@ pub struct Hull {
     /// vertex no single other vertex beats over the whole cell by
     /// [`CELL_MARGIN`].
     candidates: [u32; DIRECTION_CELLS],
-    /// The faces, for [`Hull::distance`]'s first try (empty when the hull
-    /// has more than [`MAX_HULL_FACES`] or [`MAX_HULL_EDGES`]).
-    faces: heapless::Vec<Face, MAX_HULL_FACES>,
+    /// For each direction cell of `x - mean` ([`direction_cell`]), the
+    /// faces (bit `f` for face `f`) `Hull::highest_face` tries: those found
+    /// highest at some sampled point outside the hull in the cell
+    /// ([`face_candidates`]). Zero when the hull has no faces.
+    face_candidates: [u32; DIRECTION_CELLS],
+    /// The faces, for [`Hull::distance`]'s first try: the first
+    /// `face_count` (none when the hull has more than [`MAX_HULL_FACES`]
+    /// or [`MAX_HULL_EDGES`]), the rest zero. A fixed array: the queries
+    /// index it by a face number masked into range, no bounds test.
+    face_planes: [Face; MAX_HULL_FACES],
+    /// See `face_planes`.
+    face_count: u8,
     /// Each face's sides, face by face: face `f`'s are
     /// `face_sides[face_start[f]..face_start[f + 1]]`. A side carries its
     /// edge's ends and the face across it, so the query reads no edge list
@@ -179,6 +196,12 @@ struct Face {
 }
 
 impl Face {
+    /// An unused slot.
+    const NONE: Face = Face {
+        normal: Vec3::new(0.0, 0.0, 0.0),
+        offset: 0.0,
+    };
+
     /// Whether `v` is on the face's plane, within `tolerance` (no vertex is
     /// beyond it).
     fn holds(&self, v: &Vec3, tolerance: f32) -> bool {
@@ -234,7 +257,9 @@ impl Hull {
             mean: Vec3::zeros(),
             half_width: 0.0,
             candidates: [0; DIRECTION_CELLS],
-            faces: heapless::Vec::new(),
+            face_candidates: [0; DIRECTION_CELLS],
+            face_planes: [Face::NONE; MAX_HULL_FACES],
+            face_count: 0,
             face_sides: [Side::default(); 2 * MAX_HULL_EDGES],
             face_start: [0; MAX_HULL_FACES + 1],
             vertex_neighbours: [0; 2 * MAX_HULL_EDGES],
@@ -248,7 +273,8 @@ impl Hull {
     /// hull is left empty.
     pub fn set(&mut self, vertices: &[[f32; 3]]) -> Result<(), HullError> {
         self.vertices.clear();
-        self.faces.clear();
+        self.face_planes = [Face::NONE; MAX_HULL_FACES];
+        self.face_count = 0;
         if vertices.len() < MIN_HULL_VERTICES {
             return Err(HullError::TooFewVertices);
         }
@@ -289,13 +315,22 @@ impl Hull {
         self.half_width = half_width;
         self.candidates = candidates(&self.vertices, CELL_MARGIN * self.half_box.max());
         self.tolerance = TOPOLOGY_TOLERANCE * widths.max();
-        let mut edges = heapless::Vec::new();
-        if topology(&self.vertices, self.tolerance, &mut self.faces, &mut edges).is_none() {
-            self.faces.clear();
+        let (mut faces, mut edges) = (heapless::Vec::new(), heapless::Vec::new());
+        if topology(&self.vertices, self.tolerance, &mut faces, &mut edges).is_none() {
+            faces.clear();
             edges.clear();
         }
+        for (slot, face) in self.face_planes.iter_mut().zip(&faces) {
+            *slot = *face;
+        }
+        self.face_count = faces.len() as u8;
+        self.face_candidates = if faces.len() < CELL_MIN_FACES {
+            [0; DIRECTION_CELLS]
+        } else {
+            face_candidates(&faces, &self.mean, self.tolerance)
+        };
         edges_by(
-            self.faces.len(),
+            faces.len(),
             &edges,
             |edge| edge.faces,
             |edge, face| Side {
@@ -397,9 +432,23 @@ impl Hull {
         self.by_faces(x).unwrap_or_else(|| self.by_gjk(x))
     }
 
+    /// The faces (none without a topology).
+    fn faces(&self) -> &[Face] {
+        self.face_planes
+            .get(..self.face_count as usize)
+            .unwrap_or(&[])
+    }
+
+    /// Face `f`'s plane, `f` masked into the array (a face number the
+    /// topology gave is below the count, and so in range).
+    #[inline(always)]
+    fn face(&self, f: usize) -> &Face {
+        &self.face_planes[f % MAX_HULL_FACES]
+    }
+
     /// Whether the hull has a topology (`Hull::by_faces` can answer).
     pub fn has_faces(&self) -> bool {
-        !self.faces.is_empty()
+        self.face_count > 0
     }
 
     /// The distance from `x` outside the hull by its faces and edges, when
@@ -423,7 +472,7 @@ impl Hull {
         if !(top > 0.0) {
             return None;
         }
-        let face = self.faces.get(highest)?;
+        let face = self.face(highest);
         // The face's polygon is its plane behind its neighbours' planes
         // (the faces across its sides): test those alone, at `x`'s
         // projection `y` on the face's plane.
@@ -444,9 +493,8 @@ impl Hull {
     fn farthest_beyond(&self, f: usize, y: &Vec3) -> Option<&Side> {
         let (mut beyond, mut farthest) = (None, self.tolerance);
         let past = |side: &Side| {
-            self.faces
-                .get(side.across as usize)
-                .map_or(f32::NEG_INFINITY, |g| g.normal.dot(y) - g.offset)
+            let g = self.face(side.across as usize);
+            g.normal.dot(y) - g.offset
         };
         // Two sides a pass, as the faces in `Hull::highest_face`.
         let mut pairs = self.sides_of(f).chunks_exact(2);
@@ -469,15 +517,39 @@ impl Hull {
         beyond
     }
 
-    /// The height of `x` over the face it is highest over, and that face
-    /// (the first of the highest; `-inf` and 0 for no faces or `x` not
-    /// finite): every face's height is a lower bound on the distance.
-    // Two faces a pass, as the support's scan: half the loop's counting
-    // (37 M4F instructions a 10-face query).
+    /// The height of `x` over the face it is highest over of those its
+    /// direction cell from the mean names ([`Hull::face_candidates`]; every
+    /// face for `x` at the mean or not finite), and that face (the first
+    /// of the highest; `-inf` and 0 for no faces or `x` not finite). Every
+    /// face's height is a lower bound on the distance, so the answers built
+    /// on it hold whichever face it is (see [`Hull::by_faces`]).
     fn highest_face(&self, x: &Vec3) -> (f32, usize) {
         let height = |face: &Face| face.normal.dot(x) - face.offset;
         let (mut top, mut highest) = (f32::NEG_INFINITY, 0);
-        let mut pairs = self.faces.chunks_exact(2);
+        let candidates = if self.face_count as usize >= CELL_MIN_FACES {
+            self.face_candidates
+                .get(any_cell(&(x - self.mean)))
+                .copied()
+                .unwrap_or(0)
+        } else {
+            0
+        };
+        if candidates != 0 {
+            // Ascending, as the scan: the first of the highest.
+            let mut mask = candidates;
+            while mask != 0 {
+                let f = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let h = height(self.face(f));
+                if h > top {
+                    (top, highest) = (h, f);
+                }
+            }
+            return (top, highest);
+        }
+        // Two faces a pass, as the support's scan: half the loop's counting
+        // (37 M4F instructions a 10-face query).
+        let mut pairs = self.faces().chunks_exact(2);
         let mut f = 0;
         for pair in &mut pairs {
             if let [a, b] = pair {
@@ -558,6 +630,18 @@ impl Hull {
             return None;
         }
         let distance = sqrt(distance_sq);
+        // Inside the edge: `h_1 >= h_2`, the face across no higher (with
+        // `CELL_MIN_FACES` faces or more, the face `top` is from is the
+        // highest of its cell's candidates, not always of every face).
+        if end.is_none()
+            && self.face_count as usize >= CELL_MIN_FACES
+            && !{
+                let g = self.face(side.across as usize);
+                g.normal.dot(x) - g.offset <= top
+            }
+        {
+            return None;
+        }
         // At a vertex `q`: `x - q` makes no acute angle with any of its
         // edges (they span the hull's directions from `q`).
         if let Some(end) = end {
@@ -698,6 +782,17 @@ fn direction_cell(d: &Vec3) -> Option<usize> {
     if ax >= INFINITY || ay >= INFINITY || az >= INFINITY || (ax | ay | az) == 0 {
         return None;
     }
+    Some(any_cell(d))
+}
+
+/// [`direction_cell`] without its test: a cell for any bits (a zero
+/// direction's, or a NaN's, is some cell), for callers whose answer holds
+/// from any cell.
+#[inline(always)]
+fn any_cell(d: &Vec3) -> usize {
+    const MAGNITUDE: u32 = 0x7fff_ffff;
+    let (x, y, z) = (d.x.to_bits(), d.y.to_bits(), d.z.to_bits());
+    let (ax, ay, az) = (x & MAGNITUDE, y & MAGNITUDE, z & MAGNITUDE);
     let (axis, major, u, w) = if ax >= ay && ax >= az {
         (0, x, y, z)
     } else if ay >= az {
@@ -705,7 +800,7 @@ fn direction_cell(d: &Vec3) -> Option<usize> {
     } else {
         (2, z, x, y)
     };
-    Some(axis * 8 + (major >> 31) as usize * 4 + (u >> 31) as usize * 2 + (w >> 31) as usize)
+    axis * 8 + (major >> 31) as usize * 4 + (u >> 31) as usize * 2 + (w >> 31) as usize
 }
 
 /// The hull's faces and edges, or `None` when it has more than
@@ -882,6 +977,70 @@ fn candidates(vertices: &[Vec3], margin: f32) -> [u32; DIRECTION_CELLS] {
             });
             if beaten {
                 *mask &= !1u32.wrapping_shl(a as u32);
+            }
+        }
+    }
+    cells
+}
+
+/// Each direction cell's faces for [`Hull::highest_face`]: every face
+/// that is the highest (or within `near` of it) at some sampled point `m +
+/// t u` outside the hull, `m` the vertices' mean, `u` on a 9 x 9 grid of
+/// the cell's directions (its edges included), `t` from just beyond where
+/// the ray leaves the hull to a hundred times as far, and at infinity (the
+/// face whose normal is most along `u`). A sample proves nothing: a face
+/// left out only sends a query to GJK (a height from any face is a lower
+/// bound, a projection over the face it is taken on is the closest point,
+/// and an edge is taken only past a lower face: see [`Hull::by_faces`]).
+fn face_candidates(faces: &[Face], mean: &Vec3, near: f32) -> [u32; DIRECTION_CELLS] {
+    const GRID: usize = 9;
+    const BEYOND: [f32; 8] = [1.0e-3, 0.01, 0.05, 0.2, 0.5, 1.0, 3.0, 100.0];
+    let mut cells = [0u32; DIRECTION_CELLS];
+    for (cell, mask) in cells.iter_mut().enumerate() {
+        let axis = cell / 8;
+        let sign = |bit: usize| if cell & bit == 0 { 1.0 } else { -1.0 };
+        let (sk, si, sj) = (sign(4), sign(2), sign(1));
+        for a in 0..GRID {
+            for b in 0..GRID {
+                let (p, q) = (
+                    si * a as f32 / (GRID - 1) as f32,
+                    sj * b as f32 / (GRID - 1) as f32,
+                );
+                // The cell's axis and its other two, as `direction_cell`
+                // orders them.
+                let u = match axis {
+                    0 => Vec3::new(sk, p, q),
+                    1 => Vec3::new(p, sk, q),
+                    _ => Vec3::new(p, q, sk),
+                };
+                let mut mark = |x: &Vec3, height: &dyn Fn(&Face, &Vec3) -> f32| {
+                    let top = faces
+                        .iter()
+                        .fold(f32::NEG_INFINITY, |t, f| max(t, height(f, x)));
+                    for (f, face) in faces.iter().enumerate() {
+                        if height(face, x) >= top - near {
+                            *mask |= 1u32.wrapping_shl(f as u32);
+                        }
+                    }
+                };
+                // At infinity: the normal most along `u`.
+                mark(&u, &|face, u| face.normal.dot(u));
+                // Where the ray from the mean leaves the hull, and beyond.
+                let exit = faces.iter().fold(f32::INFINITY, |t, face| {
+                    let along = face.normal.dot(&u);
+                    if along > 0.0 {
+                        min(t, (face.offset - face.normal.dot(mean)) / along)
+                    } else {
+                        t
+                    }
+                });
+                if !exit.is_finite() {
+                    continue;
+                }
+                for beyond in BEYOND {
+                    let x = mean + u * (exit * (1.0 + beyond));
+                    mark(&x, &|face, x| face.normal.dot(x) - face.offset);
+                }
             }
         }
     }
@@ -1364,14 +1523,14 @@ mod tests {
 
     /// The hull's edges: each is a side of two faces.
     fn edge_count(hull: &Hull) -> usize {
-        hull.face_start[hull.faces.len()] as usize / 2
+        hull.face_start[hull.faces().len()] as usize / 2
     }
 
     #[test]
     fn a_prism_has_its_faces_and_edges() {
         let prism = octagonal_prism();
         let hull = Hull::new(&prism).unwrap();
-        assert_eq!((hull.faces.len(), edge_count(&hull)), (10, 24));
+        assert_eq!((hull.faces().len(), edge_count(&hull)), (10, 24));
         // BENCHMARKS.md's 96 points round it (a spiral at 30 from its
         // centre): every one answered by the faces, as GJK answers it.
         for i in 0..96u32 {
@@ -1394,7 +1553,7 @@ mod tests {
             [0, 1, 2].map(|axis| if i >> axis & 1 == 0 { 1.0 } else { -1.0 })
         });
         let cube = Hull::new(&corners).unwrap();
-        assert_eq!((cube.faces.len(), edge_count(&cube)), (6, 12));
+        assert_eq!((cube.faces().len(), edge_count(&cube)), (6, 12));
         // Off a corner, an edge and a face of the cube: the corner's, the
         // edge's and the face's distances.
         for (x, want) in [
@@ -1590,5 +1749,119 @@ mod tests {
                 d.distance.is_finite() && d.lower_bound <= d.distance && d.normal.norm() > 0.99
             );
         }
+    }
+
+    /// Hulls with a topology of at least `CELL_MIN_FACES` faces: prisms of
+    /// 6 to 16 sides on random ellipses, and clouds of 8 to 12 points.
+    fn hulls_with_cells(state: &mut u64) -> heapless::Vec<(heapless::Vec<[f32; 3], 32>, Hull), 64> {
+        let mut hulls = heapless::Vec::new();
+        while !hulls.is_full() {
+            let size = random_size(state);
+            let points: heapless::Vec<[f32; 3], 32> = if hulls.len() % 2 == 0 {
+                let sides = 6 + (lcg(state) * 11.0) as usize;
+                let turn = lcg(state) * 6.0;
+                (0..2 * sides)
+                    .map(|i| {
+                        let angle =
+                            core::f32::consts::TAU * (i % sides) as f32 / sides as f32 + turn;
+                        let z = if i < sides { size[2] } else { -size[2] };
+                        [size[0] * angle.cos(), size[1] * angle.sin(), z]
+                    })
+                    .collect()
+            } else {
+                let count = 8 + (lcg(state) * 5.0) as usize;
+                random_points(state, count, size)
+            };
+            if let Ok(hull) = Hull::new(&points) {
+                if hull.faces().len() >= CELL_MIN_FACES {
+                    let _ = hulls.push((points, hull));
+                }
+            }
+        }
+        hulls
+    }
+
+    /// A random point outside the hull, within three times its size of it.
+    fn outside_point(state: &mut u64, points: &[[f32; 3]]) -> Option<([f32; 3], [f64; 3])> {
+        let scale = [0, 1, 2].map(|i| points.iter().map(|p| p[i].abs()).fold(0.0, f32::max));
+        let x = [0, 1, 2].map(|i| (2.0 * lcg(state) - 1.0) * 3.0 * scale[i]);
+        let p = x.map(f64::from);
+        (!brute_inside(points, p)).then_some((x, p))
+    }
+
+    #[test]
+    fn the_cells_face_candidates_hold_the_highest_face() {
+        let mut state = 5u64;
+        let (mut queries, mut highest, mut answered, mut tried) = (0, 0, 0, 0u32);
+        for (points, hull) in hulls_with_cells(&mut state) {
+            for cell in hull.face_candidates {
+                assert!(cell != 0 && cell >> hull.faces().len() == 0);
+                tried += cell.count_ones();
+            }
+            for _ in 0..100 {
+                let Some((x, p)) = outside_point(&mut state, &points) else {
+                    continue;
+                };
+                queries += 1;
+                let x = vec3(x);
+                let all = hull.faces().iter().map(|f| f.normal.dot(&x) - f.offset);
+                let top = all.fold(f32::NEG_INFINITY, max);
+                if hull.highest_face(&x).0 == top {
+                    highest += 1;
+                }
+                if let Some(got) = hull.by_faces(&x) {
+                    answered += 1;
+                    agrees_with_the_oracle(&points, p, &got, 0);
+                }
+            }
+        }
+        // The sampled candidates miss the highest face at very few points
+        // (each only costs GJK), and hold few faces a cell.
+        assert!(highest * 1000 >= 998 * queries, "{highest} of {queries}");
+        assert!(answered * 100 >= 95 * queries, "{answered} of {queries}");
+        assert!(
+            tried < 64 * 24 * 5,
+            "{tried} candidates in {} cells",
+            64 * 24
+        );
+    }
+
+    #[test]
+    fn answers_hold_whichever_faces_a_cell_tries() {
+        // Candidates chosen at random, the highest face often left out: an
+        // answer is still the distance (or none, and GJK answers).
+        let mut state = 9u64;
+        let (mut answered, mut queries, mut missed) = (0, 0, 0);
+        for (points, mut hull) in hulls_with_cells(&mut state) {
+            let all = u32::MAX >> (32 - hull.faces().len());
+            for cell in hull.face_candidates.iter_mut() {
+                *cell = (((lcg(&mut state) * 4294967296.0) as u64 as u32) & all).max(1);
+            }
+            for _ in 0..100 {
+                let Some((x, p)) = outside_point(&mut state, &points) else {
+                    continue;
+                };
+                queries += 1;
+                let x = vec3(x);
+                let top = hull
+                    .faces()
+                    .iter()
+                    .map(|f| f.normal.dot(&x) - f.offset)
+                    .fold(f32::NEG_INFINITY, max);
+                if hull.highest_face(&x).0 < top {
+                    missed += 1;
+                }
+                if let Some(got) = hull.by_faces(&x) {
+                    answered += 1;
+                    agrees_with_the_oracle(&points, p, &got, 0);
+                    assert!((hull.by_gjk(&x).distance - got.distance).abs() <= 1e-4);
+                }
+            }
+        }
+        assert!(
+            missed * 4 > queries,
+            "the highest face left out {missed} of {queries} times"
+        );
+        assert!(answered * 3 > queries, "{answered} of {queries}");
     }
 }
