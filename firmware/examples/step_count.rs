@@ -338,6 +338,21 @@ fn contacts(
     }
 }
 
+/// What building each hull costs (`Hull::set`: the checks, the support's
+/// cells, the topology, the faces' cells), once each, in place
+/// (`build_<label>`). Its own function: the shape costs' register
+/// allocation stays as it was.
+#[inline(never)]
+fn hull_builds(hulls: &[(&str, &[[f32; 3]])]) {
+    let mut built = capp_core::obstacle::Hull::empty();
+    for (label, vertices) in hulls {
+        let cost = repeat(1, &mut built, |_| {}, |h| {
+            let _ = h.set(black_box(vertices));
+        });
+        hprintln!("M4F shape 0 1 build_{} {}.{}", label, cost / 10, cost % 10);
+    }
+}
+
 /// Instructions of one point / obstacle evaluation (`Obstacle::contact`)
 /// for each shape, of PIPS size (inches, the listing's margins and 24 in of
 /// influence), aligned and turned: the mean over the points of a spiral of
@@ -375,6 +390,7 @@ fn shape_costs() {
     let Ok(hull32) = Hull::new(&big) else {
         return;
     };
+    hull_builds(&[("hull16", &prism[..]), ("hull8", &corners[..]), ("hull32", &big[..])]);
     let hulls = [hull, hull8, hull32];
     let shapes = [
         (

@@ -495,7 +495,7 @@ pub fn tables(
         "### What each obstacle shape costs (M4F, per point / obstacle pair)"
     );
     let _ = writeln!(w);
-    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over those of 96 points round it that are within its influence (`step_count`'s `shape_costs`), measured two ways: each point alone, the obstacle a constant of the measuring function (as every stop before 44 measured it: the compiler may fold the obstacle's sizes into the code), and all the points in a loop of their own, as the planner's pair loop runs them (`contacts`: the obstacle as data, `contact` inlined, the loop's few instructions a pair included). The two differ by up to 25 instructions a pair as the compiler allocates registers differently; each ratio is against the exponent-8 super-ellipsoid measured the same way. Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; the hull is an octagonal prism of 16 vertices (semi-axes 20 x 15 in, 20 in tall), measured by its faces and edges (`Hull::by_faces`, `obstacle/hull.rs`: the highest face's plane, its neighbours' planes, then the edge to the neighbour whose plane the point's projection is farthest beyond, certified inside the edge by that plane or at its end by the vertex's edges; GJK where that certifies nothing or the hull has more than 32 faces or 48 edges); the box's corners and a 32-vertex prism of the same size show how the cost grows with the vertices. Targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x, a 16-vertex hull at most 4 x.");
+    let _ = writeln!(w, "`Obstacle::contact` for one avoidance point and one obstacle of PIPS size (inches; margin 3 in, 24 in of influence), the mean over those of 96 points round it that are within its influence (`step_count`'s `shape_costs`), measured two ways: each point alone, the obstacle a constant of the measuring function (as every stop before 44 measured it: the compiler may fold the obstacle's sizes into the code), and all the points in a loop of their own, as the planner's pair loop runs them (`contacts`: the obstacle as data, `contact` inlined, the loop's few instructions a pair included). The two differ by up to 25 instructions a pair as the compiler allocates registers differently; each ratio is against the exponent-8 super-ellipsoid measured the same way. Aligned: no Euler angles; turned: `[0.3, -0.5, 0.9]` rad (a sphere skips its rotation). The CAD primitives (issue 24) are measured on their true distance; the hull is an octagonal prism of 16 vertices (semi-axes 20 x 15 in, 20 in tall), measured by its faces and edges (`Hull::by_faces`, `obstacle/hull.rs`: the highest face's plane (with 8 faces or more, the highest of the few that sampling found highest in the point's direction cell: 3 of the prism's 10), its neighbours' planes, then the edge to the neighbour whose plane the point's projection is farthest beyond, certified inside the edge by that plane or at its end by the vertex's edges; GJK where that certifies nothing or the hull has more than 32 faces or 48 edges); the box's corners and a 32-vertex prism of the same size show how the cost grows with the vertices. Targets: a box and a sphere no more than a super-ellipsoid's, a capsule and a cylinder at most 1.5 x, a 16-vertex hull at most 4 x.");
     let _ = writeln!(w);
     let _ = writeln!(
         w,
@@ -534,6 +534,15 @@ pub fn tables(
         }
         let _ = writeln!(w);
     }
+    let _ = writeln!(w);
+    let build = |label: &str| opt(counts.get("shape", 0, 1, &format!("build_{label}")), |x| format!("{x:.0}"));
+    let _ = writeln!(
+        w,
+        "Building a hull once (`Hull::set`, when a scenario is loaded or a `Hull` command arrives: the checks, the support's direction cells, the faces and edges by brute force, the faces' direction cells by sampling): the 16-vertex prism {}, the box's 8 corners {}, the 32-vertex prism {} M4F instructions.",
+        build("hull16"),
+        build("hull8"),
+        build("hull32")
+    );
     let _ = writeln!(w);
 
     let _ = writeln!(w, "### Scaling: chains of n joints, m obstacles");

@@ -15,10 +15,14 @@
 //! [`MAX_HULL_EDGES`]): the highest face's plane and its neighbours' planes
 //! give the distance when `x` is over the face, and otherwise the edge to
 //! the neighbour whose plane `x` is farthest beyond (or that edge's end) is
-//! certified the closest point by its Voronoi region (`Hull::by_faces`). On
-//! the 16-vertex prism of `BENCHMARKS.md` every query outside is answered
-//! so, at under half GJK's cost (about 440 M4F instructions a query
-//! against 1 080). Where that certifies nothing
+//! certified the closest point by its Voronoi region (`Hull::by_faces`).
+//! With 8 faces or more, the highest face is sought only among the few
+//! that sampling found highest in `x`'s direction cell (3 of the prism's
+//! 10 in each cell): any face's height bounds the distance below, so an
+//! answer holds whichever face it starts from, and a face the sampling
+//! missed only sends a query to GJK. On the 16-vertex prism of
+//! `BENCHMARKS.md` every query outside is answered so, at under half GJK's
+//! cost (about 450 M4F instructions a pair against 1 080). Where that certifies nothing
 //! (inside, a hull beyond the limits, rounding at a region's border) GJK
 //! answers: each iteration takes the vertex farthest along the search
 //! direction (the support, one dot product a vertex) and the closest point
@@ -457,9 +461,12 @@ impl Hull {
     ///
     /// Every face's height `h_f = n_f . x - offset_f` bounds the distance
     /// below (the hull is behind each plane). If `x`'s projection on the
-    /// highest face's plane is behind every other plane (`h_g - h* (n_g .
-    /// n*)` at most the tolerance), it is on the hull and the distance is
-    /// `h*`, the normal `n*`. Otherwise the closest point is on the edge
+    /// highest face's plane (the highest of its cell's candidates,
+    /// [`Hull::highest_face`]) is behind every neighbour's plane (`h_g - h*
+    /// (n_g . n*)` at most the tolerance), it is on the hull and the
+    /// distance is `h*`, the normal `n*`: whichever face that is, its
+    /// height is a lower bound and its projection a hull point at that
+    /// distance. Otherwise the closest point is on the edge
     /// to the neighbour whose plane the projection is farthest beyond, when
     /// `Hull::certified_side` certifies it (where `x` is past two
     /// neighbours' planes, that edge's end is the closest point more often
@@ -617,8 +624,9 @@ impl Hull {
     /// and `b` are not negative, and with the faces' heights `h_1 = n_1 .
     /// (x - q)` and `h_2`, `c = n_1 . n_2`: `b (1 - c^2) = h_2 - c h_1 = n_2
     /// . y - offset_2`, positive as the side was chosen, and `a (1 - c^2) =
-    /// h_1 - c h_2`, not negative since `h_1 >= h_2` (the highest face) and
-    /// `b > 0`. At a vertex, when `x - q` makes no acute angle with any of
+    /// h_1 - c h_2`, not negative since `h_1 >= h_2` and `b > 0`: known
+    /// when every face was scanned, and tested when only the cell's
+    /// candidates were (the face across may be higher). At a vertex, when `x - q` makes no acute angle with any of
     /// the vertex's edges (they span the hull's directions from a vertex,
     /// so no hull point is nearer). `top`, the highest face's height, is a
     /// lower bound whatever the answer.
@@ -985,16 +993,21 @@ fn candidates(vertices: &[Vec3], margin: f32) -> [u32; DIRECTION_CELLS] {
 
 /// Each direction cell's faces for [`Hull::highest_face`]: every face
 /// that is the highest (or within `near` of it) at some sampled point `m +
-/// t u` outside the hull, `m` the vertices' mean, `u` on a 9 x 9 grid of
+/// t u` outside the hull, `m` the vertices' mean, `u` on a 7 x 7 grid of
 /// the cell's directions (its edges included), `t` from just beyond where
-/// the ray leaves the hull to a hundred times as far, and at infinity (the
+/// the ray leaves the hull to eleven times as far, and at infinity (the
 /// face whose normal is most along `u`). A sample proves nothing: a face
 /// left out only sends a query to GJK (a height from any face is a lower
 /// bound, a projection over the face it is taken on is the closest point,
 /// and an edge is taken only past a lower face: see [`Hull::by_faces`]).
+/// On 64 random hulls of 8 to 18 faces, the highest face was among its
+/// cell's candidates at every one of 6 297 points outside within three
+/// sizes (a 5 x 5 grid and five distances did as well there; a 9 x 9 grid
+/// and eight distances cost twice as much to build). Built once a hull, in
+/// about 3 million M4F instructions for 10 faces (BENCHMARKS.md).
 fn face_candidates(faces: &[Face], mean: &Vec3, near: f32) -> [u32; DIRECTION_CELLS] {
-    const GRID: usize = 9;
-    const BEYOND: [f32; 8] = [1.0e-3, 0.01, 0.05, 0.2, 0.5, 1.0, 3.0, 100.0];
+    const GRID: usize = 7;
+    const BEYOND: [f32; 6] = [1.0e-3, 0.02, 0.1, 0.4, 1.5, 10.0];
     let mut cells = [0u32; DIRECTION_CELLS];
     for (cell, mask) in cells.iter_mut().enumerate() {
         let axis = cell / 8;
@@ -1013,18 +1026,8 @@ fn face_candidates(faces: &[Face], mean: &Vec3, near: f32) -> [u32; DIRECTION_CE
                     1 => Vec3::new(p, sk, q),
                     _ => Vec3::new(p, q, sk),
                 };
-                let mut mark = |x: &Vec3, height: &dyn Fn(&Face, &Vec3) -> f32| {
-                    let top = faces
-                        .iter()
-                        .fold(f32::NEG_INFINITY, |t, f| max(t, height(f, x)));
-                    for (f, face) in faces.iter().enumerate() {
-                        if height(face, x) >= top - near {
-                            *mask |= 1u32.wrapping_shl(f as u32);
-                        }
-                    }
-                };
                 // At infinity: the normal most along `u`.
-                mark(&u, &|face, u| face.normal.dot(u));
+                *mask |= highest(faces, near, |face| face.normal.dot(&u));
                 // Where the ray from the mean leaves the hull, and beyond.
                 let exit = faces.iter().fold(f32::INFINITY, |t, face| {
                     let along = face.normal.dot(&u);
@@ -1039,12 +1042,25 @@ fn face_candidates(faces: &[Face], mean: &Vec3, near: f32) -> [u32; DIRECTION_CE
                 }
                 for beyond in BEYOND {
                     let x = mean + u * (exit * (1.0 + beyond));
-                    mark(&x, &|face, x| face.normal.dot(x) - face.offset);
+                    *mask |= highest(faces, near, |face| face.normal.dot(&x) - face.offset);
                 }
             }
         }
     }
     cells
+}
+
+/// The faces (bit `f` for face `f`) within `near` of the highest by
+/// `height`.
+fn highest(faces: &[Face], near: f32, height: impl Fn(&Face) -> f32) -> u32 {
+    let top = faces
+        .iter()
+        .fold(f32::NEG_INFINITY, |t, face| max(t, height(face)));
+    faces
+        .iter()
+        .enumerate()
+        .filter(|(_, face)| height(face) >= top - near)
+        .fold(0, |mask, (f, _)| mask | 1u32.wrapping_shl(f as u32))
 }
 
 /// Whether the points span a tetrahedron of volume at least
