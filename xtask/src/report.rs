@@ -535,7 +535,11 @@ pub fn tables(
         let _ = writeln!(w);
     }
     let _ = writeln!(w);
-    let build = |label: &str| opt(counts.get("shape", 0, 1, &format!("build_{label}")), |x| format!("{x:.0}"));
+    let build = |label: &str| {
+        opt(counts.get("shape", 0, 1, &format!("build_{label}")), |x| {
+            format!("{x:.0}")
+        })
+    };
     let _ = writeln!(
         w,
         "Building a hull once (`Hull::set`, when a scenario is loaded or a `Hull` command arrives: the checks, the support's direction cells, the faces and edges by brute force, the faces' direction cells by sampling): the 16-vertex prism {}, the box's 8 corners {}, the 32-vertex prism {} M4F instructions.",

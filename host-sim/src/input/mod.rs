@@ -5,6 +5,7 @@
 //! |---|---|
 //! | [`scenario_file`] | the TOML scenario format (documented in `docs/scenario.md`) |
 //! | [`legacy`] | CAPP.c's `input.dat` (and writes its `joints.dat` records) |
+//! | `mesh_obstacle` | a scenario's `convex` and `mesh` obstacles: hulls, mesh parts as primitives, shared hulls, convex pieces |
 //! | [`urdf`] | a scenario's `[robot] urdf = "..."`: a URDF robot as general joints |
 //! | [`pivots`] | where a URDF joint's pivot sits on its axis, so each link's chord runs through its body |
 //! | [`link_capsule`] | the one capsule checked per URDF link: round its chord, or round a segment of its own along its body |
@@ -16,6 +17,7 @@
 
 pub mod legacy;
 pub mod link_capsule;
+mod mesh_obstacle;
 pub mod pivots;
 pub mod scenario_file;
 pub mod urdf;
