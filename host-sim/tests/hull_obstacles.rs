@@ -1003,14 +1003,10 @@ fn a_round_drum_and_a_fine_ball_from_cad_are_a_cylinder_and_a_ball() {
     common::check_accepts(&out);
 }
 
-#[test]
-fn the_arm_reaches_into_the_notch_of_an_l_that_its_hull_would_fill() {
-    // One closed STL part, an L whose notch holds the target (inside the
-    // L's hull, 0.1 from the L): split along its own faces into two boxes,
-    // the arm reaches the target and the checker accepts the run; as one
-    // hull round it (`parts = "one"`) the target is inside, and the arm
-    // stops short.
-    let dir = tempfile::tempdir().unwrap();
+/// A closed L-shaped prism 0.1 thick (one STL part) in the planar arm's
+/// reach; its notch holds the point (0.4, 0.7, 0), 0.1 from each of the
+/// two boxes it splits into, inside its hull.
+fn l_triangles() -> Vec<[[f32; 3]; 3]> {
     let outline: [[f32; 2]; 6] = [
         [0.25, 0.8],
         [0.5, 0.8],
@@ -1033,7 +1029,77 @@ fn the_arm_reaches_into_the_notch_of_an_l_that_its_hull_would_fill() {
         triangles.push([at(k, bottom), at(j, bottom), at(j, top)]);
         triangles.push([at(k, bottom), at(j, top), at(k, top)]);
     }
-    write(dir.path(), "l.stl", &ascii_stl(&triangles));
+    triangles
+}
+
+#[test]
+fn a_part_of_several_that_is_not_convex_is_split_while_hull_slots_last() {
+    // One STL of two parts: a frustum (a hull: no primitive) and the L. The
+    // L is split into two boxes (its notch free), the frustum stays a hull,
+    // the note names the part split; with no hull slot to spare (six
+    // `convex` entries after it: two slots, one a part) the L stays a
+    // hull, with its hollow note.
+    let dir = tempfile::tempdir().unwrap();
+    let mut triangles = moved(&frustum_triangles([0.05, 0.05, 0.05]), [-0.5, -0.6, 0.0]);
+    triangles.extend(l_triangles());
+    write(dir.path(), "two.stl", &ascii_stl(&triangles));
+    let entry = "\n[[obstacles]]\nname = \"two\"\nshape = \"mesh\"\nmesh = \"two.stl\"\ncentre = [0.0, 0.0, 0.0]\n";
+    let p = load_in(dir.path(), entry).unwrap();
+    let frustum_first = p.obstacle_names[0] == "two part 1";
+    let (frustum, l) = if frustum_first { (1, 2) } else { (2, 1) };
+    let mut names = vec![
+        format!("two part {frustum}"),
+        format!("two part {l} piece 1"),
+        format!("two part {l} piece 2"),
+    ];
+    names.sort();
+    assert_eq!(p.obstacle_names, names);
+    assert_eq!(p.hulls.len(), 1, "the frustum");
+    assert_eq!(p.notes.len(), 1, "{:?}", p.notes);
+    assert!(
+        p.notes[0].ends_with(&format!(
+            "part {l}: it is not convex: split along its own faces into 2 convex pieces (2 boxes), which hold it exactly"
+        )),
+        "{:?}",
+        p.notes
+    );
+    // The notch's point is 0.1 from each box.
+    for (k, name) in p.obstacle_names.iter().enumerate() {
+        if name.contains("piece") {
+            let d = world_distance(&p, k, [0.4, 0.7, 0.0]);
+            assert!((d - 0.1).abs() < 1e-5, "{name}: {d}");
+        }
+    }
+    // No hull slot to spare: the L is its hull, the note says how hollow.
+    let mut crowded = entry.to_string();
+    for k in 0..6 {
+        crowded.push_str(&format!(
+            "\n[[obstacles]]\nshape = \"convex\"\ncentre = [{}, -2.0, 0.0]\nvertices = {}\n",
+            0.3 * k as f64,
+            box_vertices([0.05, 0.05, 0.05])
+        ));
+    }
+    let p = load_in(dir.path(), &crowded).unwrap();
+    assert_eq!(p.hulls.len(), 8);
+    assert_eq!(p.obstacle_names[..2], ["two part 1", "two part 2"]);
+    assert!(
+        p.notes
+            .iter()
+            .any(|n| n.contains("it is not convex: planned round its convex hull")),
+        "{:?}",
+        p.notes
+    );
+}
+
+#[test]
+fn the_arm_reaches_into_the_notch_of_an_l_that_its_hull_would_fill() {
+    // One closed STL part, an L whose notch holds the target (inside the
+    // L's hull, 0.1 from the L): split along its own faces into two boxes,
+    // the arm reaches the target and the checker accepts the run; as one
+    // hull round it (`parts = "one"`) the target is inside, and the arm
+    // stops short.
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "l.stl", &ascii_stl(&l_triangles()));
     let scenario = |parts: &str| {
         write(
             dir.path(),

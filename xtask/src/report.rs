@@ -536,9 +536,10 @@ pub fn tables(
     }
     let _ = writeln!(w);
     let build = |label: &str| {
-        opt(counts.get("shape", 0, 1, &format!("build_{label}")), |x| {
-            format!("{x:.0}")
-        })
+        opt(
+            counts.get("shape", 0, 1, &format!("build_{label}")),
+            grouped,
+        )
     };
     let _ = writeln!(
         w,

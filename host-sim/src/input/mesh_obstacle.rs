@@ -173,11 +173,13 @@ fn mesh_hull(points: &[[f64; 3]]) -> Result<Enclosure, NoHull> {
 
 /// What one obstacle entry becomes: a primitive or a hull, made of these parts
 /// of its mesh (0-based; empty for a `convex` entry), or this piece of its
-/// one part ([`crate::decompose`]).
+/// one part ([`crate::decompose`]), or of part `within` of several.
 pub(super) struct Piece {
     pub(super) parts: Vec<usize>,
     /// `"part"`, or `"piece"` for a piece of a part split in convex pieces.
     pub(super) word: &'static str,
+    /// For a piece of one part of a mesh of several, that part (0-based).
+    pub(super) within: Option<usize>,
     pub(super) form: Form,
 }
 
@@ -223,6 +225,7 @@ pub(super) fn mesh_pieces(
         Ok(Piece {
             parts,
             word: "part",
+            within: None,
             form: Form::Hull(as_f32(&hull.corners), note),
         })
     };
@@ -241,6 +244,7 @@ pub(super) fn mesh_pieces(
         Piece {
             parts,
             word: "part",
+            within: None,
             form: Form::Solid(f.placed(placement.0, placement.1), note),
         }
     };
@@ -283,7 +287,7 @@ pub(super) fn mesh_pieces(
             None => rest.push(k),
         }
     }
-    let mut note = None;
+    let note;
     if rest.len() > slots && slots > 0 {
         let points: Vec<Vec<[f64; 3]>> = rest.iter().map(|&k| parts[k].points.clone()).collect();
         let groups: Vec<Vec<usize>> = merge(&points, slots)
@@ -315,11 +319,50 @@ pub(super) fn mesh_pieces(
             pieces.push(hull_piece(group, &points, alone)?);
         }
     } else {
-        for k in rest {
-            pieces.push(hull_piece(vec![k], &parts[k].points, Some(&parts[k]))?);
+        // Hull slots and obstacles to spare: the parts that are not convex
+        // (closed, `SPLIT_HOLLOW` or more of their hull empty), the most
+        // hollow first, are split into convex pieces while they last.
+        let mut spare = slots.saturating_sub(rest.len());
+        let mut room_left = room.saturating_sub(parts.len());
+        let hollowness = |k: usize| parts[k].hollowness().unwrap_or(0.0);
+        let mut order = rest.clone();
+        order.sort_by(|&a, &b| hollowness(b).total_cmp(&hollowness(a)));
+        let mut split_notes = Vec::new();
+        for k in order {
+            let part = &parts[k];
+            if spare > 0 && room_left > 0 && hollowness(k) >= SPLIT_HOLLOW {
+                if let Some((split, split_note)) =
+                    split_pieces(part, (1 + spare, 1 + room_left), &solid, &hull_piece)?
+                {
+                    let hulls = split
+                        .iter()
+                        .filter(|p| matches!(p.form, Form::Hull(..)))
+                        .count();
+                    spare = (spare + 1).saturating_sub(hulls);
+                    room_left = (room_left + 1).saturating_sub(split.len());
+                    pieces.extend(split.into_iter().map(|p| Piece {
+                        within: Some(k),
+                        ..p
+                    }));
+                    if let Some(n) = split_note {
+                        split_notes.push((k, n));
+                    }
+                    continue;
+                }
+            }
+            pieces.push(hull_piece(vec![k], &part.points, Some(part))?);
         }
+        split_notes.sort_by_key(|(k, _)| *k);
+        let listed: Vec<String> = split_notes
+            .into_iter()
+            .map(|(k, n)| format!("part {}: {n}", k + 1))
+            .collect();
+        note = (!listed.is_empty()).then(|| listed.join("; "));
     }
-    pieces.sort_by_key(|p| p.parts.first().copied());
+    pieces.sort_by_key(|p| match p.within {
+        Some(k) => (Some(k), p.parts.first().copied()),
+        None => (p.parts.first().copied(), None),
+    });
     Ok((pieces, note))
 }
 
@@ -421,6 +464,11 @@ const MAX_SPLIT_PIECES: usize = 24;
 /// A part's hull is at least this hollow (the share of its volume that is
 /// not the part) before the loader says so.
 const HOLLOW_NOTE: f64 = 0.05;
+
+/// A closed part of a mesh of several with this share of its hull or more
+/// empty is split into convex pieces when hull slots are left
+/// ([`mesh_pieces`]; a mesh of one part is always tried).
+const SPLIT_HOLLOW: f64 = 0.02;
 
 /// What the notes say of a part that is not convex (its closed surface
 /// leaves [`HOLLOW_NOTE`] or more of its hull empty); `None` for a convex

@@ -963,6 +963,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
                 vec![Piece {
                     parts: Vec::new(),
                     word: "part",
+                    within: None,
                     form: Form::Hull(corners, None),
                 }]
             }
@@ -1005,9 +1006,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Problem, LoadError> {
             let name = if several {
                 let list: Vec<String> = piece.parts.iter().map(|k| (k + 1).to_string()).collect();
                 let plural = if piece.parts.len() > 1 { "s" } else { "" };
-                format!("{} {}{plural} {}", s.name, piece.word, list.join(", "))
-                    .trim_start()
-                    .to_string()
+                let within = piece.within.map(|k| format!(" part {}", k + 1));
+                format!(
+                    "{}{} {}{plural} {}",
+                    s.name,
+                    within.unwrap_or_default(),
+                    piece.word,
+                    list.join(", ")
+                )
+                .trim_start()
+                .to_string()
             } else {
                 s.name.clone()
             };

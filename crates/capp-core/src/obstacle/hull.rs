@@ -22,8 +22,9 @@
 //! answer holds whichever face it starts from, and a face the sampling
 //! missed only sends a query to GJK. On the 16-vertex prism of
 //! `BENCHMARKS.md` every query outside is answered so, at under half GJK's
-//! cost (about 450 M4F instructions a pair against 1 080). Where that certifies nothing
-//! (inside, a hull beyond the limits, rounding at a region's border) GJK
+//! cost (about 450 M4F instructions a pair against 1 080). Where that
+//! certifies nothing (inside, a hull beyond the limits, rounding at a
+//! region's border) GJK
 //! answers: each iteration takes the vertex farthest along the search
 //! direction (the support, one dot product a vertex) and the closest point
 //! of the simplex of at most four support points found so far (Ericson, "Real-Time
@@ -626,9 +627,10 @@ impl Hull {
     /// . y - offset_2`, positive as the side was chosen, and `a (1 - c^2) =
     /// h_1 - c h_2`, not negative since `h_1 >= h_2` and `b > 0`: known
     /// when every face was scanned, and tested when only the cell's
-    /// candidates were (the face across may be higher). At a vertex, when `x - q` makes no acute angle with any of
-    /// the vertex's edges (they span the hull's directions from a vertex,
-    /// so no hull point is nearer). `top`, the highest face's height, is a
+    /// candidates were (the face across may be higher). At a vertex, when
+    /// `x - q` makes no acute angle with any of the vertex's edges (they
+    /// span the hull's directions from a vertex, so no hull point is
+    /// nearer). `top`, the highest face's height, is a
     /// lower bound whatever the answer.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn certified_side(&self, x: &Vec3, side: &Side, top: f32) -> Option<HullDistance> {
