@@ -346,9 +346,14 @@ fn contacts(
 fn hull_builds(hulls: &[(&str, &[[f32; 3]])]) {
     let mut built = capp_core::obstacle::Hull::empty();
     for (label, vertices) in hulls {
-        let cost = repeat(1, &mut built, |_| {}, |h| {
-            let _ = h.set(black_box(vertices));
-        });
+        let cost = repeat(
+            1,
+            &mut built,
+            |_| {},
+            |h| {
+                let _ = h.set(black_box(vertices));
+            },
+        );
         hprintln!("M4F shape 0 1 build_{} {}.{}", label, cost / 10, cost % 10);
     }
 }
@@ -390,7 +395,11 @@ fn shape_costs() {
     let Ok(hull32) = Hull::new(&big) else {
         return;
     };
-    hull_builds(&[("hull16", &prism[..]), ("hull8", &corners[..]), ("hull32", &big[..])]);
+    hull_builds(&[
+        ("hull16", &prism[..]),
+        ("hull8", &corners[..]),
+        ("hull32", &big[..]),
+    ]);
     let hulls = [hull, hull8, hull32];
     let shapes = [
         (
