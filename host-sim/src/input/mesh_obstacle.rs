@@ -199,9 +199,12 @@ pub(super) enum Form {
 /// own (a closed part): each part that is a box, a cylinder or a ball
 /// ([`fit`]) that solid, each other part a hull, and when those are more
 /// than `slots` (the hull slots this obstacle may take), neighbouring ones
-/// merged into `slots` hulls. Else (`parts = "one"`, or an open surface
-/// such as a mesh of loose faces, whose parts are flat) one piece round
-/// them all, a primitive if it is one.
+/// merged into `slots` hulls; when fewer, the hollow ones (closed,
+/// [`SPLIT_HOLLOW`] or more of their hull empty; the most hollow first)
+/// split into convex pieces with the slots and obstacles to spare. Else
+/// (`parts = "one"`, or an open surface such as a mesh of loose faces,
+/// whose parts are flat) one piece round them all, a primitive if it is
+/// one.
 /// `placement` is the mesh's centre and Euler angles, radians (for the
 /// boxes).
 pub(super) fn mesh_pieces(
