@@ -12,7 +12,9 @@
 //! lie on a round cylinder (two end faces, every corner nearly one distance
 //! from the axis: a pipe, a drum, a shaft) or on a ball, fine enough that
 //! the solid through its corners reaches at most 2 % of its radius beyond
-//! the hull (16 sides or more), is planned as that cylinder or ball: a CAD
+//! the hull (16 sides or more), is planned as that cylinder or ball (and a
+//! part whose corners all lie nearly one distance from a segment, longer
+//! than wide, as that capsule: a pin, a rod with rounded ends): a CAD
 //! tessellation puts its vertices on the true surface, so the solid through
 //! them is the part as designed, where its hull (or an enclosure of 32
 //! corners, `crate::enclosure`) would take a hull slot and cost 4-6 times
@@ -148,6 +150,14 @@ pub enum FitForm {
         /// Radius.
         radius: f64,
     },
+    /// A capsule: the points within `radius` of a segment of `length`
+    /// along the third axis, centred.
+    Capsule {
+        /// Radius.
+        radius: f64,
+        /// The segment's length (the capsule's less two radii).
+        length: f64,
+    },
 }
 
 /// A fitted part placed for the core: the `f32` values an obstacle takes.
@@ -158,13 +168,13 @@ pub struct Placed {
     /// `R = Rz Ry Rx` of these angles (radians, `[rx, ry, rz]`) turns the
     /// solid's frame into the world's.
     pub euler_123: [f32; 3],
-    /// The core's shape (`Cuboid`, `Cylinder` or `Sphere`).
+    /// The core's shape (`Cuboid`, `Cylinder`, `Sphere` or `Capsule`).
     pub shape: capp_core::Shape,
 }
 
 /// The primitive `points` are, when their convex hull is one: a box (8
 /// corners, each at a corner of the box the edges from one of them span,
-/// to `BOX_TOLERANCE` (1e-6 of its size)), or a cylinder or a ball through every corner that
+/// to `BOX_TOLERANCE` (1e-6 of its size)), or a cylinder, a ball or a capsule through every corner that
 /// reaches at most `ROUND_OVERSHOOT` (2 %) of its radius beyond the hull (a
 /// tessellated CAD cylinder of 16 sides or more, a ball of 16 x 32 facets
 /// or finer); `None` otherwise (or for points that span no volume).
@@ -173,6 +183,7 @@ pub fn fit(points: &[V3]) -> Option<Fitted> {
     box_of(&hull)
         .or_else(|| cylinder_of(&hull))
         .or_else(|| sphere_of(&hull))
+        .or_else(|| capsule_of(&hull))
 }
 
 const IDENTITY: [V3; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -345,7 +356,84 @@ fn sphere_of(hull: &CloudHull) -> Option<Fitted> {
     })
 }
 
-/// The radius of the round solid (a cylinder or a ball) through the
+/// [`fit`]'s capsule: its axis the line through the means of the corners
+/// on either side of their mean's plane across the farthest pair (refined
+/// twice: for a capsule, symmetric about its middle, that is the axis), its
+/// segment what the corners' extent along it leaves after a radius at each
+/// end, every corner nearly at the radius from the segment; it reaches
+/// beyond the hull by at most its radius less the least distance of a
+/// face's plane from the segment.
+fn capsule_of(hull: &CloudHull) -> Option<Fitted> {
+    let corners = &hull.corners;
+    let centre = mean(corners);
+    let (a, b) = corners
+        .iter()
+        .flat_map(|&p| corners.iter().map(move |&q| (p, q)))
+        .max_by(|x, y| {
+            let d = |(p, q): (V3, V3)| dot(sub(p, q), sub(p, q));
+            d(*x).total_cmp(&d(*y))
+        })?;
+    let mut axis = unit(sub(a, b))?;
+    for _ in 0..2 {
+        let side = |sign: f64| {
+            let near: Vec<V3> = corners
+                .iter()
+                .copied()
+                .filter(|&p| sign * dot(sub(p, centre), axis) > 0.0)
+                .collect();
+            (!near.is_empty()).then(|| mean(&near))
+        };
+        axis = unit(sub(side(1.0)?, side(-1.0)?))?;
+    }
+    let along: Vec<f64> = corners.iter().map(|&p| dot(sub(p, centre), axis)).collect();
+    let (lo, hi) = along
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+            (lo.min(t), hi.max(t))
+        });
+    let centre = add(centre, scaled(axis, (lo + hi) / 2.0));
+    let radial = |p: V3| {
+        let d = sub(p, centre);
+        let off = sub(d, scaled(axis, dot(d, axis)));
+        dot(off, off).sqrt()
+    };
+    let radius = corners.iter().map(|&p| radial(p)).fold(0.0, f64::max);
+    let half = (hi - lo) / 2.0 - radius;
+    // Longer than wide by a radius at least (shorter is a ball's work, or
+    // no capsule's); NaN is neither.
+    if half.is_nan() || half < radius {
+        return None;
+    }
+    let from_segment = |p: V3| {
+        let d = sub(p, centre);
+        let t = dot(d, axis).clamp(-half, half);
+        let off = sub(d, scaled(axis, t));
+        dot(off, off).sqrt()
+    };
+    let faces = hull
+        .triangles
+        .iter()
+        .map(|t| t.offset - dot(t.normal, centre) - half * dot(t.normal, axis).abs());
+    let (radius, overshoot) = round_through(corners, from_segment, faces)?;
+    let axes = if axis[2].abs() >= 1.0 - 1e-12 {
+        IDENTITY
+    } else {
+        let x = unit(cross(axis, [0.0, 0.0, 1.0]))?;
+        [x, cross(axis, x), axis]
+    };
+    Some(Fitted {
+        centre,
+        axes,
+        form: FitForm::Capsule {
+            radius,
+            length: 2.0 * half,
+        },
+        overshoot,
+        corners: corners.clone(),
+    })
+}
+
+/// The radius of the round solid (a cylinder, a ball or a capsule) through the
 /// farthest of `corners`, each at `distance` from its axis or centre, and
 /// how far it reaches beyond the hull whose face planes lie at `planes`
 /// from the axis or centre (the hull holds the solid of their least
@@ -440,6 +528,19 @@ impl Fitted {
             FitForm::Sphere { radius } => capp_core::Shape::Sphere {
                 radius: grow(radius, largest(&|l| dot(*l, *l).sqrt())),
             },
+            FitForm::Capsule { radius, length } => {
+                // The f32 segment no shorter than the fitted one; the
+                // radius grown to every corner's distance from it.
+                let half = round_up(length / 2.0);
+                let from_segment = |l: &V3| {
+                    let z = l[2] - l[2].clamp(-f64::from(half), f64::from(half));
+                    (l[0] * l[0] + l[1] * l[1] + z * z).sqrt()
+                };
+                capp_core::Shape::Capsule {
+                    radius: grow(radius, largest(&from_segment)),
+                    length: 2.0 * half,
+                }
+            }
         };
         Placed {
             centre: centre_f32,
@@ -666,6 +767,11 @@ mod tests {
                     && l[2].abs() <= f64::from(length) / 2.0
             }
             capp_core::Shape::Sphere { radius } => dot(l, l).sqrt() <= f64::from(radius),
+            capp_core::Shape::Capsule { radius, length } => {
+                let half = f64::from(length) / 2.0;
+                let z = l[2] - l[2].clamp(-half, half);
+                (l[0] * l[0] + l[1] * l[1] + z * z).sqrt() <= f64::from(radius)
+            }
             _ => false,
         }
     }
@@ -904,6 +1010,95 @@ mod tests {
                 "{rings} {squash}"
             );
         }
+    }
+
+    /// A capsule's tessellation (a UV capsule, as CAD and Blender write
+    /// one): `segments` round, `rings` latitude rings a cap with its pole,
+    /// radius `a` across x (`b` across y: round when equal), the segment
+    /// `length` along z; turned by `r` and moved to `centre`.
+    #[allow(clippy::too_many_arguments)]
+    fn capsule_points(
+        segments: usize,
+        rings: usize,
+        a: f64,
+        b: f64,
+        length: f64,
+        r: &[[f64; 3]; 3],
+        centre: V3,
+    ) -> Vec<V3> {
+        let mut local = vec![[0.0, 0.0, length / 2.0 + a], [0.0, 0.0, -length / 2.0 - a]];
+        for cap in [1.0, -1.0] {
+            for i in 0..rings {
+                // From the equator (i = 0) toward the pole.
+                let polar = std::f64::consts::FRAC_PI_2 * i as f64 / rings as f64;
+                for k in 0..segments {
+                    let t = std::f64::consts::TAU * k as f64 / segments as f64;
+                    local.push([
+                        a * polar.cos() * t.cos(),
+                        b * polar.cos() * t.sin(),
+                        cap * (length / 2.0 + a * polar.sin()),
+                    ]);
+                }
+            }
+        }
+        local
+            .iter()
+            .map(|p| add(centre, [0, 1, 2].map(|i| dot(r[i], *p))))
+            .collect()
+    }
+
+    #[test]
+    fn fine_capsules_are_capsules_through_their_corners() {
+        let mut rng = 17u64;
+        for case in 0..80 {
+            let scale = 10f64.powf(lcg(&mut rng) * 4.0 - 2.0);
+            let radius = scale * (0.05 + lcg(&mut rng));
+            let length = radius * (2.0 + 4.0 * lcg(&mut rng));
+            let segments = 24 + (lcg(&mut rng) * 40.0) as usize;
+            let rings = 6 + (lcg(&mut rng) * 10.0) as usize;
+            let r = random_rotation(&mut rng);
+            let centre = [0, 1, 2].map(|_| scale * 10.0 * (lcg(&mut rng) - 0.5));
+            let points = capsule_points(segments, rings, radius, radius, length, &r, centre);
+            let part = fit(&points).unwrap_or_else(|| panic!("case {case}"));
+            let FitForm::Capsule {
+                radius: got,
+                length: long,
+            } = part.form
+            else {
+                panic!("case {case}: {:?}", part.form);
+            };
+            assert!(
+                (got - radius).abs() <= 1e-9 * radius,
+                "case {case}: {got} {radius}"
+            );
+            assert!(
+                (long - length).abs() <= 1e-9 * scale,
+                "case {case}: {long} {length}"
+            );
+            assert!(part.overshoot <= 0.02 * radius, "case {case}");
+            let angles = [0, 1, 2].map(|_| (lcg(&mut rng) - 0.5) * 7.0);
+            let origin = [0, 1, 2].map(|_| scale * 30.0 * (lcg(&mut rng) - 0.5));
+            let placed = part.placed(origin, angles);
+            assert!(matches!(placed.shape, capp_core::Shape::Capsule { .. }));
+            for x in in_world(&points, origin, angles) {
+                assert!(holds(&placed, x), "case {case}: outside");
+            }
+        }
+        // Too coarse (8 round), not round (elliptic), or no longer than a
+        // ball: no capsule (the last a ball).
+        let id = rotation([0.0; 3]);
+        for (segments, b, length) in [(8, 1.0, 3.0), (48, 0.8, 3.0)] {
+            assert_eq!(
+                fit(&capsule_points(segments, 8, 1.0, b, length, &id, [0.0; 3])),
+                None,
+                "{segments} {b}"
+            );
+        }
+        let short = fit(&capsule_points(48, 12, 1.0, 1.0, 0.0, &id, [0.0; 3]));
+        assert!(
+            matches!(short.as_ref().map(|f| f.form), Some(FitForm::Sphere { .. })),
+            "{short:?}"
+        );
     }
 
     /// A small tetrahedron at `at`.

@@ -918,6 +918,90 @@ fn a_curved_part_beyond_the_corner_budget_is_planned_round_an_enclosure_that_hol
     common::check_accepts(&out);
 }
 
+/// A closed UV capsule along z: `segments` round, `rings` latitude bands a
+/// cap (its pole a vertex), radius `r`, segment `length`.
+fn capsule_triangles(segments: usize, rings: usize, r: f32, length: f32) -> Vec<[[f32; 3]; 3]> {
+    // Latitude `i` of `2 rings + 1` from the top pole (0) to the bottom
+    // pole; the two equators (`rings`, `rings + 1`) bound the band.
+    let point = |i: usize, k: usize| {
+        let (polar, z) = if i <= rings {
+            let polar = std::f32::consts::FRAC_PI_2 * i as f32 / rings as f32;
+            (polar, length / 2.0 + r * polar.cos())
+        } else {
+            let polar = std::f32::consts::FRAC_PI_2 * (i - 1) as f32 / rings as f32;
+            (polar, -length / 2.0 + r * polar.cos())
+        };
+        let t = std::f32::consts::TAU * (k % segments) as f32 / segments as f32;
+        [r * polar.sin() * t.cos(), r * polar.sin() * t.sin(), z]
+    };
+    let mut triangles = Vec::new();
+    for i in 0..=2 * rings {
+        for k in 0..segments {
+            let (a, b) = (point(i, k), point(i, k + 1));
+            let (c, d) = (point(i + 1, k), point(i + 1, k + 1));
+            if i > 0 {
+                triangles.push([a, c, b]);
+            }
+            if i < 2 * rings {
+                triangles.push([b, c, d]);
+            }
+        }
+    }
+    triangles
+}
+
+#[test]
+fn a_capsule_from_cad_is_a_capsule() {
+    // A UV capsule (radius 0.06, segment 0.2; 48 round, 8 bands a cap)
+    // lying along the mesh's x: a capsule through its corners, no hull
+    // slot, with its note; every vertex inside (the checker's geometry);
+    // the arm reaches round it and `capp check` accepts the run.
+    let dir = tempfile::tempdir().unwrap();
+    let triangles: Vec<[[f32; 3]; 3]> = capsule_triangles(48, 8, 0.06, 0.2)
+        .iter()
+        .map(|t| t.map(|v| [v[2], v[1], -v[0]]))
+        .collect();
+    std::fs::write(dir.path().join("pill.stl"), binary_stl(&triangles)).unwrap();
+    let path = write(
+        dir.path(),
+        "pill.toml",
+        &format!(
+            "{}\n[[obstacles]]\nname = \"pill\"\nshape = \"mesh\"\nmesh = \"pill.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n",
+            head()
+        ),
+    );
+    let p = Problem::load(&path).unwrap();
+    assert!(p.hulls.is_empty());
+    let Shape::Capsule { radius, length } = p.obstacles[0].shape else {
+        panic!("{:?}", p.obstacles[0]);
+    };
+    assert!(
+        (radius - 0.06).abs() < 1e-5 && (length - 0.2).abs() < 1e-5,
+        "{radius} {length}"
+    );
+    assert_eq!(p.notes.len(), 1, "{:?}", p.notes);
+    assert!(
+        p.notes[0]
+            .contains("its hull's corners lie on a capsule: planned as a capsule through them"),
+        "{:?}",
+        p.notes
+    );
+    let frame = capp_sim::geometry::rotation([0.0, 0.0, 20f64.to_radians()]);
+    for t in &triangles {
+        for v in t {
+            let v = v.map(f64::from);
+            let world = [0, 1, 2].map(|i| {
+                [0.65, 0.35, 0.0][i] + frame[i].iter().zip(v).map(|(r, x)| r * x).sum::<f64>()
+            });
+            let d = world_distance(&p, 0, world);
+            assert!(d <= 1e-6, "a vertex outside the capsule: {d}");
+        }
+    }
+    let out = dir.path().join("run");
+    common::run_rendered(&path, &out);
+    common::check_accepts(&out);
+}
+
 #[test]
 fn a_round_drum_and_a_fine_ball_from_cad_are_a_cylinder_and_a_ball() {
     // A 64-sided drum (radius 0.1, turned in its file: its axis along x)

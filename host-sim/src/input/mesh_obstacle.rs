@@ -184,7 +184,7 @@ pub(super) struct Piece {
 }
 
 pub(super) enum Form {
-    /// A mesh part that is a box, a cylinder or a ball
+    /// A mesh part that is a box, a cylinder, a ball or a capsule
     /// ([`crate::mesh_parts`]), and the note when it reaches beyond the
     /// part's hull.
     Solid(Placed, Option<String>),
@@ -196,7 +196,7 @@ pub(super) enum Form {
 /// were merged or a part split. One part (with `separate`) is split into
 /// convex pieces when a cut pays ([`split_pieces`], at most `room`
 /// obstacles). With `separate` and every part spanning a volume of its
-/// own (a closed part): each part that is a box, a cylinder or a ball
+/// own (a closed part): each part that is a box, a cylinder, a ball or a capsule
 /// ([`fit`]) that solid, each other part a hull, and when those are more
 /// than `slots` (the hull slots this obstacle may take), neighbouring ones
 /// merged into `slots` hulls; when fewer, the hollow ones (closed,
@@ -238,6 +238,7 @@ pub(super) fn mesh_pieces(
                 FitForm::Cylinder { .. } => "a cylinder",
                 FitForm::Sphere { .. } => "a ball",
                 FitForm::Box { .. } => "a box",
+                FitForm::Capsule { .. } => "a capsule",
             };
             format!(
                 "its hull's corners lie on {what}: planned as {what} through them, at most {} {unit} beyond the part's own hull",
@@ -419,20 +420,23 @@ fn split_pieces(
         piece.word = "piece";
         pieces.push(piece);
     }
-    // How many pieces of each kind: boxes, cylinders, balls, hulls.
-    let mut counts = [0usize; 4];
+    // How many pieces of each kind: boxes, cylinders, balls, capsules,
+    // hulls.
+    let mut counts = [0usize; 5];
     for f in &fitted {
         counts[match f.as_ref().map(|f| f.form) {
             Some(FitForm::Box { .. }) => 0,
             Some(FitForm::Cylinder { .. }) => 1,
             Some(FitForm::Sphere { .. }) => 2,
-            None => 3,
+            Some(FitForm::Capsule { .. }) => 3,
+            None => 4,
         }] += 1;
     }
     let kinds = [
         ("box", "boxes"),
         ("cylinder", "cylinders"),
         ("ball", "balls"),
+        ("capsule", "capsules"),
         ("hull", "hulls"),
     ];
     let listed: Vec<String> = counts
