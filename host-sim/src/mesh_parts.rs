@@ -357,7 +357,7 @@ fn sphere_of(hull: &CloudHull) -> Option<Fitted> {
 }
 
 /// [`fit`]'s capsule: its axis the line through the means of the corners
-/// on either side of their mean's plane across the farthest pair (refined
+/// on either side of their mean's plane across a far pair (refined
 /// twice: for a capsule, symmetric about its middle, that is the axis), its
 /// segment what the corners' extent along it leaves after a radius at each
 /// end, every corner nearly at the radius from the segment; it reaches
@@ -366,13 +366,15 @@ fn sphere_of(hull: &CloudHull) -> Option<Fitted> {
 fn capsule_of(hull: &CloudHull) -> Option<Fitted> {
     let corners = &hull.corners;
     let centre = mean(corners);
-    let (a, b) = corners
-        .iter()
-        .flat_map(|&p| corners.iter().map(move |&q| (p, q)))
-        .max_by(|x, y| {
-            let d = |(p, q): (V3, V3)| dot(sub(p, q), sub(p, q));
-            d(*x).total_cmp(&d(*y))
-        })?;
+    // A far pair in two linear passes (the corner farthest from the mean,
+    // then the one farthest from it): a hull may have thousands of corners.
+    let farthest_from = |from: V3| {
+        corners.iter().copied().max_by(|&p, &q| {
+            dot(sub(p, from), sub(p, from)).total_cmp(&dot(sub(q, from), sub(q, from)))
+        })
+    };
+    let a = farthest_from(centre)?;
+    let b = farthest_from(a)?;
     let mut axis = unit(sub(a, b))?;
     for _ in 0..2 {
         let side = |sign: f64| {
