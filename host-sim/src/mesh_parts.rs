@@ -287,11 +287,7 @@ fn cylinder_of(hull: &CloudHull) -> Option<Fitted> {
         .filter(|&(count, _)| count >= 12)?
         .1;
     let along: Vec<f64> = corners.iter().map(|&p| dot(p, axis)).collect();
-    let (lo, hi) = along
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
-            (lo.min(t), hi.max(t))
-        });
+    let (lo, hi) = extent(&along);
     if along
         .iter()
         .any(|&t| (t - lo).abs() > tolerance && (t - hi).abs() > tolerance)
@@ -312,17 +308,9 @@ fn cylinder_of(hull: &CloudHull) -> Option<Fitted> {
         .filter(|t| dot(t.normal, axis).abs() <= 1e-6)
         .map(|t| t.offset - dot(t.normal, centre));
     let (radius, overshoot) = round_through(corners, radial, sides)?;
-    // Axes: the cylinder's along the mesh's z keeps the mesh's placement;
-    // else x level (square to the axis and to the mesh's z).
-    let axes = if axis[2].abs() >= 1.0 - 1e-12 {
-        IDENTITY
-    } else {
-        let x = unit(cross(axis, [0.0, 0.0, 1.0]))?;
-        [x, cross(axis, x), axis]
-    };
     Some(Fitted {
         centre,
-        axes,
+        axes: round_axes(axis)?,
         form: FitForm::Cylinder {
             radius,
             length: hi - lo,
@@ -388,11 +376,7 @@ fn capsule_of(hull: &CloudHull) -> Option<Fitted> {
         axis = unit(sub(side(1.0)?, side(-1.0)?))?;
     }
     let along: Vec<f64> = corners.iter().map(|&p| dot(sub(p, centre), axis)).collect();
-    let (lo, hi) = along
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
-            (lo.min(t), hi.max(t))
-        });
+    let (lo, hi) = extent(&along);
     let centre = add(centre, scaled(axis, (lo + hi) / 2.0));
     let radial = |p: V3| {
         let d = sub(p, centre);
@@ -417,15 +401,9 @@ fn capsule_of(hull: &CloudHull) -> Option<Fitted> {
         .iter()
         .map(|t| t.offset - dot(t.normal, centre) - half * dot(t.normal, axis).abs());
     let (radius, overshoot) = round_through(corners, from_segment, faces)?;
-    let axes = if axis[2].abs() >= 1.0 - 1e-12 {
-        IDENTITY
-    } else {
-        let x = unit(cross(axis, [0.0, 0.0, 1.0]))?;
-        [x, cross(axis, x), axis]
-    };
     Some(Fitted {
         centre,
-        axes,
+        axes: round_axes(axis)?,
         form: FitForm::Capsule {
             radius,
             length: 2.0 * half,
@@ -433,6 +411,26 @@ fn capsule_of(hull: &CloudHull) -> Option<Fitted> {
         overshoot,
         corners: corners.clone(),
     })
+}
+
+/// The least and the largest of `values`.
+fn extent(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+            (lo.min(t), hi.max(t))
+        })
+}
+
+/// A round solid's axes, `axis` the third: along the mesh's z the mesh's
+/// own (its placement kept); else x level (square to the axis and to the
+/// mesh's z).
+fn round_axes(axis: V3) -> Option<[V3; 3]> {
+    if axis[2].abs() >= 1.0 - 1e-12 {
+        return Some(IDENTITY);
+    }
+    let x = unit(cross(axis, [0.0, 0.0, 1.0]))?;
+    Some([x, cross(axis, x), axis])
 }
 
 /// The radius of the round solid (a cylinder, a ball or a capsule) through the

@@ -918,6 +918,49 @@ fn a_curved_part_beyond_the_corner_budget_is_planned_round_an_enclosure_that_hol
     common::check_accepts(&out);
 }
 
+/// Writes `triangles` to the binary STL `file` in `dir` and a scenario
+/// placing it, as obstacle `name`, at (0.65, 0.35, 0) turned 20 degrees
+/// about z ([`MESH_CENTRE`], [`MESH_TURN_DEG`]); its path.
+fn mesh_scenario(dir: &Path, file: &str, name: &str, triangles: &[[[f32; 3]; 3]]) -> PathBuf {
+    std::fs::write(dir.join(file), binary_stl(triangles)).unwrap();
+    write(
+        dir,
+        &format!("{name}.toml"),
+        &format!(
+            "{}\n[[obstacles]]\nname = \"{name}\"\nshape = \"mesh\"\nmesh = \"{file}\"\ncentre = [{:?}, {:?}, {:?}]\neuler = [0.0, 0.0, {MESH_TURN_DEG:?}]\n",
+            head(),
+            MESH_CENTRE[0],
+            MESH_CENTRE[1],
+            MESH_CENTRE[2]
+        ),
+    )
+}
+
+/// Where [`mesh_scenario`] places its mesh, and how far it turns it about
+/// z (degrees).
+const MESH_CENTRE: [f64; 3] = [0.65, 0.35, 0.0];
+const MESH_TURN_DEG: f64 = 20.0;
+
+/// Every vertex of [`mesh_scenario`]'s `triangles` in (or on) its obstacle
+/// (`obstacle_of(k)` for triangle `k`), by the checker's geometry.
+fn assert_vertices_inside(
+    p: &Problem,
+    triangles: &[[[f32; 3]; 3]],
+    obstacle_of: impl Fn(usize) -> usize,
+) {
+    let frame = capp_sim::geometry::rotation([0.0, 0.0, MESH_TURN_DEG.to_radians()]);
+    for (k, t) in triangles.iter().enumerate() {
+        let obstacle = obstacle_of(k);
+        for v in t {
+            let v = v.map(f64::from);
+            let world = [0, 1, 2]
+                .map(|i| MESH_CENTRE[i] + frame[i].iter().zip(v).map(|(r, x)| r * x).sum::<f64>());
+            let d = world_distance(p, obstacle, world);
+            assert!(d <= 1e-6, "a vertex outside obstacle {obstacle}: {d}");
+        }
+    }
+}
+
 /// A closed UV capsule along z: `segments` round, `rings` latitude bands a
 /// cap (its pole a vertex), radius `r`, segment `length`.
 fn capsule_triangles(segments: usize, rings: usize, r: f32, length: f32) -> Vec<[[f32; 3]; 3]> {
@@ -961,15 +1004,7 @@ fn a_capsule_from_cad_is_a_capsule() {
         .iter()
         .map(|t| t.map(|v| [v[2], v[1], -v[0]]))
         .collect();
-    std::fs::write(dir.path().join("pill.stl"), binary_stl(&triangles)).unwrap();
-    let path = write(
-        dir.path(),
-        "pill.toml",
-        &format!(
-            "{}\n[[obstacles]]\nname = \"pill\"\nshape = \"mesh\"\nmesh = \"pill.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n",
-            head()
-        ),
-    );
+    let path = mesh_scenario(dir.path(), "pill.stl", "pill", &triangles);
     let p = Problem::load(&path).unwrap();
     assert!(p.hulls.is_empty());
     let Shape::Capsule { radius, length } = p.obstacles[0].shape else {
@@ -986,17 +1021,7 @@ fn a_capsule_from_cad_is_a_capsule() {
         "{:?}",
         p.notes
     );
-    let frame = capp_sim::geometry::rotation([0.0, 0.0, 20f64.to_radians()]);
-    for t in &triangles {
-        for v in t {
-            let v = v.map(f64::from);
-            let world = [0, 1, 2].map(|i| {
-                [0.65, 0.35, 0.0][i] + frame[i].iter().zip(v).map(|(r, x)| r * x).sum::<f64>()
-            });
-            let d = world_distance(&p, 0, world);
-            assert!(d <= 1e-6, "a vertex outside the capsule: {d}");
-        }
-    }
+    assert_vertices_inside(&p, &triangles, |_| 0);
     let out = dir.path().join("run");
     common::run_rendered(&path, &out);
     common::check_accepts(&out);
@@ -1031,15 +1056,7 @@ fn a_round_drum_and_a_fine_ball_from_cad_are_a_cylinder_and_a_ball() {
             triangles.extend([[a, c, d], [a, d, b]]);
         }
     }
-    std::fs::write(dir.path().join("drum_ball.stl"), binary_stl(&triangles)).unwrap();
-    let path = write(
-        dir.path(),
-        "cell.toml",
-        &format!(
-            "{}\n[[obstacles]]\nname = \"drum\"\nshape = \"mesh\"\nmesh = \"drum_ball.stl\"\ncentre = [0.65, 0.35, 0.0]\neuler = [0.0, 0.0, 20.0]\n",
-            head()
-        ),
-    );
+    let path = mesh_scenario(dir.path(), "drum_ball.stl", "drum", &triangles);
     let p = Problem::load(&path).unwrap();
     assert!(p.hulls.is_empty());
     let Shape::Cylinder { radius, length } = p.obstacles[0].shape else {
@@ -1066,18 +1083,7 @@ fn a_round_drum_and_a_fine_ball_from_cad_are_a_cylinder_and_a_ball() {
         p.notes
     );
     // Every vertex of both parts in (or on) its solid.
-    let frame = capp_sim::geometry::rotation([0.0, 0.0, 20f64.to_radians()]);
-    for (k, t) in triangles.iter().enumerate() {
-        let obstacle = usize::from(k >= 256);
-        for v in t {
-            let v = v.map(f64::from);
-            let world = [0, 1, 2].map(|i| {
-                [0.65, 0.35, 0.0][i] + frame[i].iter().zip(v).map(|(r, x)| r * x).sum::<f64>()
-            });
-            let d = world_distance(&p, obstacle, world);
-            assert!(d <= 1e-6, "a vertex outside obstacle {obstacle}: {d}");
-        }
-    }
+    assert_vertices_inside(&p, &triangles, |k| usize::from(k >= 256));
     let out = dir.path().join("run");
     let stdout = common::run_rendered(&path, &out);
     assert!(

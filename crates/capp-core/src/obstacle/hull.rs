@@ -534,6 +534,8 @@ impl Hull {
     fn highest_face(&self, x: &Vec3) -> (f32, usize) {
         let height = |face: &Face| face.normal.dot(x) - face.offset;
         let (mut top, mut highest) = (f32::NEG_INFINITY, 0);
+        // A hull of fewer faces has no cells (all zero): tested first so
+        // that it does not pay for finding its cell.
         let candidates = if self.face_count as usize >= CELL_MIN_FACES {
             self.face_candidates
                 .get(any_cell(&(x - self.mean)))
