@@ -25,6 +25,16 @@
 //! largest at one of the segment's ends: the ticks. So the test takes, per
 //! link, the largest first-order travel over the ticks of the stop and
 //! `Q_k` of each joint's largest excursion.
+//!
+//! A link clears its stop by either of two certificates, and its margin is
+//! the better one's: the *ball* (every point moves less than its room,
+//! in any direction), or, when the evaluation gave the link a half-space
+//! of its nearest obstacle with both ends inside, the *plane* (each end
+//! moves toward the plane, `-n . J x` over the ticks, less than its
+//! distance from it, and every point less than its room from the other
+//! obstacles). The plane lets a link slide along a surface it is close to;
+//! the ball clears a link whose plane, tilted away from it, holds one end
+//! nearer than the obstacle itself.
 
 use super::limits::DriveLimits;
 use super::DriveState;
@@ -245,26 +255,38 @@ pub fn stop_margin<const N: usize>(
         }
         let travel = crate::math::sqrt(f_sq) + second;
         let travel_sq = travel * travel;
-        let mut slid = false;
+        // Two certificates, either of which clears the link alone: every
+        // point stays within its room in every direction (the ball,
+        // `d_sq`), or both ends stay short of the nearest obstacle's
+        // half-space and every point within its room from the others (the
+        // plane). The link's margin is the better of the two: a plane
+        // tilted away from the link holds an end nearer than the obstacle
+        // itself is (PIPS's bay: a truss link's pivot 1.9 in from the plane
+        // of a payload 5.3 in away), and the ball clears a stop the plane
+        // refuses.
+        let ball_sq = ratio_sq(d_sq, travel_sq);
+        let (mut link_sq, mut link_bound) = (ball_sq, None);
         if let Some(h) = planes.get(k).copied().flatten() {
             let normal = Vec3::new(h.normal[0], h.normal[1], h.normal[2]);
             let rooms = [frames.pivot(k), frames.link_end(k)].map(|p| normal.dot(&p) - h.offset);
             if rooms.iter().all(|&r| r > 0.0) {
-                slid = true;
-                if lower(&mut least_sq, h.others_sq, travel_sq) {
-                    bound = None;
-                }
+                let mut plane_sq = ratio_sq(h.others_sq, travel_sq);
+                let mut plane_bound = None;
                 let toward = toward.get(k).copied().unwrap_or([f32::INFINITY; 2]);
                 for (end, (&t, room)) in toward.iter().zip(rooms).enumerate() {
                     let need = t + second;
-                    if lower(&mut least_sq, room * room, need * need) {
-                        bound = Some((k, end));
+                    let end_sq = ratio_sq(room * room, need * need);
+                    if end_sq < plane_sq {
+                        (plane_sq, plane_bound) = (end_sq, Some((k, end)));
                     }
+                }
+                if plane_sq >= ball_sq {
+                    (link_sq, link_bound) = (plane_sq, plane_bound);
                 }
             }
         }
-        if !slid && lower(&mut least_sq, d_sq, travel_sq) {
-            bound = None;
+        if link_sq < least_sq {
+            (least_sq, bound) = (link_sq, link_bound);
         }
     }
     for ((pair, &rel_sq), _) in pairs
@@ -429,21 +451,29 @@ impl<const N: usize> TravelSums<N> {
     }
 }
 
-/// `least_sq` lowered to `room_sq / need_sq` (nothing for no need; 0 for
-/// a NaN, so a bad value is never clear). Returns whether it went lower.
+/// `least_sq` lowered to [`ratio_sq`]`(room_sq, need_sq)`. Returns whether
+/// it went lower.
 #[inline]
 fn lower(least_sq: &mut f32, room_sq: f32, need_sq: f32) -> bool {
+    let ratio = ratio_sq(room_sq, need_sq);
+    let before = *least_sq;
+    *least_sq = min(*least_sq, ratio);
+    *least_sq < before
+}
+
+/// `room_sq / need_sq`: infinity for no need, 0 for a NaN or a negative
+/// ratio (so a bad value is never clear).
+#[inline]
+fn ratio_sq(room_sq: f32, need_sq: f32) -> f32 {
     if need_sq == 0.0 && room_sq >= 0.0 {
-        return false;
+        return f32::INFINITY;
     }
     let ratio = room_sq / need_sq;
-    let before = *least_sq;
-    *least_sq = if ratio >= 0.0 {
-        min(*least_sq, ratio)
+    if ratio >= 0.0 {
+        ratio
     } else {
         0.0
-    };
-    *least_sq < before
+    }
 }
 
 /// The second-order bound `Q` of link `b`'s travel when only the joints

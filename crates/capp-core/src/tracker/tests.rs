@@ -645,6 +645,155 @@ fn the_stop_margin_is_the_share_of_room_the_stop_needs() {
     assert!(tested > 80, "{tested} states tested");
 }
 
+/// A half-space of link `k`'s nearest obstacle: unit normal `normal`
+/// (normalised here), both of the link's ends `room` or more inside it (the
+/// nearer end exactly `room`), every other obstacle `others` away.
+fn plane_of<const M: usize>(
+    frames: &crate::kinematics::Frames<M>,
+    k: usize,
+    normal: [f32; 3],
+    room: f32,
+    others: f32,
+) -> crate::avoidance::HalfSpace {
+    let normal = crate::math::Vec3::from(normal).normalize();
+    let offset = normal
+        .dot(&frames.pivot(k))
+        .min(normal.dot(&frames.link_end(k)))
+        - room;
+    crate::avoidance::HalfSpace {
+        link: k as u8,
+        normal: [normal.x, normal.y, normal.z],
+        offset,
+        others_sq: others * others,
+    }
+}
+
+/// Two certificates clear a link's stop, either alone: its points within
+/// its room in every direction (the ball), or its ends short of the
+/// nearest obstacle's half-space and its points within their room from the
+/// others (the plane). The plane's is sound on its own (forward kinematics
+/// at every tick and between: a plane just inside the deepest point's
+/// approach is refused), and the link's margin is the better of the two,
+/// to the bit: a tilted plane that holds an end nearer than the ball's
+/// room does not refuse a stop the ball clears. (Before, a link with a
+/// plane was held to the plane alone: `ball wins` cases then fail.)
+#[test]
+fn either_certificate_clears_a_link_and_the_margin_is_the_better_one() {
+    use super::clearance::{stop_is_clear, stop_margin};
+    use crate::kinematics::{forward_kinematics, Frames};
+    let mut rng = Rng::seeded(41, &[]);
+    let (mut ball_wins, mut plane_wins, mut refused) = (0, 0, 0);
+    for _ in 0..200 {
+        let MovingArm {
+            n,
+            robot,
+            limits,
+            q,
+            dt,
+            after,
+            frames,
+        } = MovingArm::random(&mut rng);
+        let k = (range(&mut rng, 0.0, n as f32) as usize).min(n - 1);
+        let normal = [0, 1, 2].map(|_| rng.uniform());
+        // The plane's soundness: the deepest approach of the link's chord
+        // (its ends and middle, the avoidance points lie between) toward it.
+        let probe = plane_of(&frames, k, normal, 0.0, f32::INFINITY);
+        let n_hat = crate::math::Vec3::from(probe.normal);
+        let depth = |f: &Frames<N>| {
+            [
+                f.pivot(k),
+                (f.pivot(k) + f.link_end(k)) * 0.5,
+                f.link_end(k),
+            ]
+            .map(|p| n_hat.dot(&p) - probe.offset)
+        };
+        let start = depth(&frames);
+        let mut approach = 0.0f32;
+        let mut moved = Frames::<N>::default();
+        for x in stop_samples(&after, &limits, dt) {
+            let qx: Vec<f32> = q.iter().zip(&x).map(|(q, x)| q + x).collect();
+            forward_kinematics(&robot, &qx, &mut moved);
+            // How far below the nearer end's starting room the chord goes.
+            let lowest = depth(&moved).into_iter().fold(f32::INFINITY, f32::min);
+            approach = approach.max(start[0].min(start[2]) - lowest);
+        }
+        let mut rooms = [f32::INFINITY; N];
+        let mut planes = [None; N];
+        let clear = |rooms: &[f32; N], planes: &[Option<crate::avoidance::HalfSpace>; N]| {
+            stop_is_clear(
+                &robot,
+                &frames,
+                &rooms[..n],
+                &planes[..n],
+                &[],
+                &after,
+                &limits,
+                dt,
+                1.0,
+            )
+        };
+        if approach > 1e-4 {
+            rooms[k] = 0.0;
+            planes[k] = Some(plane_of(&frames, k, normal, 0.99 * approach, f32::INFINITY));
+            assert!(
+                !clear(&rooms, &planes),
+                "link {k} approaches its plane by {approach} but was cleared with room {}",
+                0.99 * approach
+            );
+            refused += 1;
+        }
+        // The margin with both certificates against each alone.
+        let ball_room = range(&mut rng, 0.01, 0.5);
+        let plane = plane_of(
+            &frames,
+            k,
+            normal,
+            range(&mut rng, 0.005, 0.3),
+            ball_room + range(&mut rng, 0.0, 0.5),
+        );
+        let mut travel = vec![0.0f32; n];
+        after.excursion(&limits, dt, &mut travel);
+        let margin = |room: f32, plane: Option<crate::avoidance::HalfSpace>| {
+            let mut rooms = [f32::INFINITY; N];
+            rooms[k] = room * room;
+            let mut planes = [None; N];
+            planes[k] = plane;
+            stop_margin(
+                &robot,
+                &frames,
+                &rooms[..n],
+                &planes[..n],
+                &[],
+                &after,
+                &travel,
+                &limits,
+                dt,
+                1.0,
+            )
+            .margin
+        };
+        let (ball, alone, both) = (
+            margin(ball_room, None),
+            margin(0.0, Some(plane)),
+            margin(ball_room, Some(plane)),
+        );
+        assert_eq!(
+            both.to_bits(),
+            ball.max(alone).to_bits(),
+            "link {k}: ball {ball}, plane {alone}, both {both}"
+        );
+        if ball > alone {
+            ball_wins += 1;
+        } else if alone > ball {
+            plane_wins += 1;
+        }
+    }
+    assert!(
+        refused > 60 && ball_wins > 30 && plane_wins > 30,
+        "{refused} planes refused, ball better {ball_wins}, plane better {plane_wins}"
+    );
+}
+
 /// [`profile::braking`] is [`profile::toward`] velocity 0, to the bit, on
 /// every state the model reaches (random moves toward random velocities
 /// from rest), for random limits.
