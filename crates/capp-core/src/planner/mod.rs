@@ -304,10 +304,14 @@ impl<const N: usize> Planner<N> {
             for (r, &v) in self.rate[..n].iter_mut().zip(self.drive.velocity()) {
                 *r = v;
             }
+            // An arm braked to rest within the final target's tolerance
+            // has reached it: this tick's row says so (the next step would
+            // say it in a row of no time, off the control period).
+            self.pass_waypoints(scenario);
         } else {
             self.drive.record_step(&[], 0.0);
         }
-        if self.step >= scenario.settings().max_steps {
+        if self.step >= scenario.settings().max_steps && !self.is_done() {
             self.phase = Phase::Done(Outcome::Capped);
         }
         self.last = self.report(held, false, 0);
