@@ -736,13 +736,18 @@ mod tests {
         (*state >> 11) as f64 / (1u64 << 53) as f64
     }
 
+    /// `local` turned by `r` (rows) and moved to `centre`.
+    fn moved(centre: V3, r: &[[f64; 3]; 3], local: V3) -> V3 {
+        add(centre, [0, 1, 2].map(|i| dot(r[i], local)))
+    }
+
     /// The corners of a box of `half` about `centre` turned by `r` (its
     /// axes the columns).
     fn box_corners(centre: V3, r: &[[f64; 3]; 3], half: V3) -> Vec<V3> {
         (0..8)
             .map(|c: usize| {
                 let local = [0, 1, 2].map(|a| if c >> a & 1 == 1 { half[a] } else { -half[a] });
-                add(centre, [0, 1, 2].map(|i| dot(r[i], local)))
+                moved(centre, r, local)
             })
             .collect()
     }
@@ -779,10 +784,7 @@ mod tests {
     /// `points` placed by a mesh frame at `origin` turned by `angles`.
     fn in_world(points: &[V3], origin: V3, angles: V3) -> Vec<V3> {
         let frame = rotation(angles);
-        points
-            .iter()
-            .map(|p| add(origin, [0, 1, 2].map(|i| dot(frame[i], *p))))
-            .collect()
+        points.iter().map(|&p| moved(origin, &frame, p)).collect()
     }
 
     #[test]
@@ -925,7 +927,7 @@ mod tests {
             let t = std::f64::consts::TAU * k as f64 / sides as f64;
             for z in [-length / 2.0, length / 2.0] {
                 let local = [a * t.cos(), b * t.sin(), z];
-                points.push(add(centre, [0, 1, 2].map(|i| dot(r[i], local))));
+                points.push(moved(centre, r, local));
             }
         }
         points
@@ -1041,10 +1043,7 @@ mod tests {
                 }
             }
         }
-        local
-            .iter()
-            .map(|p| add(centre, [0, 1, 2].map(|i| dot(r[i], *p))))
-            .collect()
+        local.iter().map(|&p| moved(centre, r, p)).collect()
     }
 
     #[test]
